@@ -1,0 +1,50 @@
+/*
+ * mvt_cv.h - constant-velocity target state shared by every Kalman-type filter in the core.
+ *
+ * The PKF paper's state is the homogeneous 8-vector s = [X Y Z 1 Vx Vy Vz 0]^T (Eq. 14) with an
+ * 8x8 covariance whose 4th and 8th rows and columns are zero. Those entries are constants, so the
+ * core stores only the six that vary: x = [X Y Z Vx Vy Vz] (m, m/s) and their 6x6 covariance;
+ * the 8x8 form is recovered by inserting the constants (tests do exactly that against Eigen).
+ *
+ * Motion model: white-noise acceleration with spectral density q (m^2/s^3) per axis,
+ * F = [I dt I; 0 I] (the paper's Eq. 16 with the actual frame interval dt instead of 1/T),
+ * Q = q [dt^3/3 I, dt^2/2 I; dt^2/2 I, dt I].
+ */
+#ifndef MVT_CV_H
+#define MVT_CV_H
+
+#include "mvt_types.h"
+
+typedef struct mvt_cv_state {
+    mvt_real x[6];    /* X Y Z (m), Vx Vy Vz (m/s) */
+    mvt_real P[36];   /* covariance, row-major, kept symmetric */
+    int64_t utime_us; /* time the estimate refers to */
+} mvt_cv_state_t;
+
+/* Starts a state at pos with position covariance pos_cov (3x3) and isotropic velocity variance
+ * vel_var (m^2/s^2); velocity 0. */
+void mvt_cv_init(mvt_cv_state_t *s, const mvt_real pos[3], const mvt_real pos_cov[9],
+                 mvt_real vel_var, int64_t utime_us);
+
+/* Predicts by dt_s >= 0 seconds (~120 flops). MVT_ERR_INVALID for negative/non-finite dt. */
+mvt_err_t mvt_cv_predict(mvt_cv_state_t *s, mvt_real dt_s, const mvt_real q[3]);
+
+/* Predicts to utime_us if it is later than the state's time (no-op otherwise). */
+mvt_err_t mvt_cv_predict_to(mvt_cv_state_t *s, int64_t utime_us, const mvt_real q[3]);
+
+/* Kalman update with a direct 3D position measurement z (m) of covariance R (3x3, m^2), Joseph
+ * form. If gate_chi2 > 0 and the squared Mahalanobis distance exceeds it, the state is left
+ * unchanged and MVT_ERR_GATED returned. d2 (may be NULL) receives the distance. ~400 flops. */
+mvt_err_t mvt_cv_update_point(mvt_cv_state_t *s, const mvt_real z[3], const mvt_real R[9],
+                              mvt_real gate_chi2, mvt_real *d2);
+
+/* Symmetrises P, floors its diagonal at var_floor and checks that it is finite and positive
+ * definite. MVT_ERR_NUMERIC if the position block is not PD after repair. */
+mvt_err_t mvt_cv_repair(mvt_cv_state_t *s, mvt_real var_floor);
+
+/* Joseph-form covariance update for a measurement that observes only the position:
+ * P <- (I - K H) P (I - K H)^T + K R K^T with H = [Hp 0] (m x 3 block), K (6 x m), R (m x m),
+ * all row-major, m <= 3. Shared by the point and projective updates. */
+void mvt_cv_joseph(mvt_cv_state_t *s, int m, const mvt_real *hp, const mvt_real *k, const mvt_real *r);
+
+#endif /* MVT_CV_H */

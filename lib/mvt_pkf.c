@@ -1,0 +1,165 @@
+#include "mvt_pkf.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "mvt_linalg.h"
+
+mvt_err_t mvt_pkf_meas_make(const mvt_camera_t *cam, const mvt_real uv[2], mvt_real sigma_px, mvt_pkf_meas_t *out)
+{
+    if (!mvt_la_all_finite(uv, 2) || !isfinite(sigma_px)) {
+        return MVT_ERR_NONFINITE;
+    }
+    if (!(sigma_px > MVT_R(0.0))) {
+        return MVT_ERR_INVALID;
+    }
+    const mvt_err_t err = mvt_cam_undistort(cam, uv, out->xn);
+    if (err != MVT_OK) {
+        return err;
+    }
+    out->raw[0] = uv[0];
+    out->raw[1] = uv[1];
+    mvt_cam_normalised_to_ideal(cam, out->xn, out->ideal);
+    out->var_px2 = sigma_px * sigma_px;
+    return MVT_OK;
+}
+
+mvt_err_t mvt_pkf_innovation(const mvt_cv_state_t *s, const mvt_camera_t *cam, mvt_pkf_lin_t lin,
+                             const mvt_pkf_meas_t *meas, mvt_pkf_innov_t *out)
+{
+    const mvt_real *x = s->x;
+    if (lin == MVT_PKF_JACOBIAN) {
+        mvt_real uv[2];
+        const mvt_err_t err = mvt_cam_project(cam, x, uv, out->H);
+        if (err != MVT_OK) {
+            return err;
+        }
+        out->y[0] = meas->raw[0] - uv[0];
+        out->y[1] = meas->raw[1] - uv[1];
+    } else {
+        /* Eq. 18: H = alpha P_k (pixel rows), alpha = 1 / (P_k^3 . s) */
+        const mvt_real *P = cam->P;
+        const mvt_real w = P[8] * x[0] + P[9] * x[1] + P[10] * x[2] + P[11];
+        if (!(w > MVT_R(1e-3))) {
+            return MVT_ERR_BEHIND;
+        }
+        const mvt_real alpha = MVT_R(1.0) / w;
+        const mvt_real cu = lin == MVT_PKF_PAPER_CENTRED ? cam->cx : MVT_R(0.0);
+        const mvt_real cv = lin == MVT_PKF_PAPER_CENTRED ? cam->cy : MVT_R(0.0);
+        for (int c = 0; c < 3; c++) {
+            out->H[c] = alpha * (P[c] - cu * P[8 + c]);
+            out->H[3 + c] = alpha * (P[4 + c] - cv * P[8 + c]);
+        }
+        const mvt_real u = alpha * (P[0] * x[0] + P[1] * x[1] + P[2] * x[2] + P[3]);
+        const mvt_real v = alpha * (P[4] * x[0] + P[5] * x[1] + P[6] * x[2] + P[7]);
+        out->y[0] = meas->ideal[0] - u;
+        out->y[1] = meas->ideal[1] - v;
+    }
+    /* S = H Ppp H^T + r I */
+    const mvt_real *P = s->P;
+    mvt_real hp[6]; /* H Ppp, 2x3 */
+    for (int a = 0; a < 2; a++) {
+        for (int c = 0; c < 3; c++) {
+            hp[a * 3 + c] = out->H[a * 3 + 0] * P[0 * 6 + c] + out->H[a * 3 + 1] * P[1 * 6 + c] +
+                            out->H[a * 3 + 2] * P[2 * 6 + c];
+        }
+    }
+    out->r = meas->var_px2;
+    out->S[0] = hp[0] * out->H[0] + hp[1] * out->H[1] + hp[2] * out->H[2] + out->r;
+    out->S[1] = hp[0] * out->H[3] + hp[1] * out->H[4] + hp[2] * out->H[5];
+    out->S[2] = hp[3] * out->H[3] + hp[4] * out->H[4] + hp[5] * out->H[5] + out->r;
+    mvt_real si[3];
+    if (mvt_la_inv2_sym(out->S, si) != MVT_OK) {
+        return MVT_ERR_NUMERIC;
+    }
+    out->d2 = out->y[0] * (si[0] * out->y[0] + si[1] * out->y[1]) +
+              out->y[1] * (si[1] * out->y[0] + si[2] * out->y[1]);
+    if (!isfinite(out->d2)) {
+        return MVT_ERR_NUMERIC;
+    }
+    return MVT_OK;
+}
+
+mvt_err_t mvt_pkf_update(mvt_cv_state_t *s, const mvt_pkf_innov_t *in)
+{
+    mvt_real si[3];
+    if (mvt_la_inv2_sym(in->S, si) != MVT_OK) {
+        return MVT_ERR_NUMERIC;
+    }
+    /* PHt = P[:, 0:3] H^T (6x2), K = PHt S^-1 */
+    const mvt_real *P = s->P;
+    const mvt_real *H = in->H;
+    mvt_real k[12];
+    for (int i = 0; i < 6; i++) {
+        const mvt_real a0 = P[i * 6 + 0] * H[0] + P[i * 6 + 1] * H[1] + P[i * 6 + 2] * H[2];
+        const mvt_real a1 = P[i * 6 + 0] * H[3] + P[i * 6 + 1] * H[4] + P[i * 6 + 2] * H[5];
+        k[i * 2 + 0] = a0 * si[0] + a1 * si[1];
+        k[i * 2 + 1] = a0 * si[1] + a1 * si[2];
+    }
+    for (int i = 0; i < 6; i++) {
+        s->x[i] += k[i * 2 + 0] * in->y[0] + k[i * 2 + 1] * in->y[1];
+    }
+    const mvt_real r[4] = {in->r, MVT_R(0.0), MVT_R(0.0), in->r};
+    mvt_cv_joseph(s, 2, H, k, r);
+    return MVT_OK;
+}
+
+mvt_err_t mvt_pkf_paper_distance(const mvt_cv_state_t *s, const mvt_camera_t *cam, const mvt_real var_m2[3],
+                                 mvt_real gamma, const mvt_pkf_meas_t *meas, mvt_real *dist)
+{
+    const mvt_real *P = cam->P;
+    const mvt_real *c = s->x;
+    /* Dual quadric of the ellipsoid centred at c: Q* = T diag(a^2, b^2, c^2, -1) T^T,
+     * T = [I c; 0 1], i.e. [D - c c^T, -c; -c^T, -1]. */
+    mvt_real q[16];
+    for (int i = 0; i < 3; i++) {
+        for (int j = 0; j < 3; j++) {
+            q[i * 4 + j] = (i == j ? gamma * var_m2[i] : MVT_R(0.0)) - c[i] * c[j];
+        }
+        q[i * 4 + 3] = -c[i];
+        q[3 * 4 + i] = -c[i];
+    }
+    q[15] = MVT_R(-1.0);
+    /* C* = P Q* P^T (3x3) */
+    mvt_real pq[12], cs[9], cc[9];
+    for (int r = 0; r < 3; r++) {
+        for (int j = 0; j < 4; j++) {
+            pq[r * 4 + j] = P[r * 4 + 0] * q[0 * 4 + j] + P[r * 4 + 1] * q[1 * 4 + j] +
+                            P[r * 4 + 2] * q[2 * 4 + j] + P[r * 4 + 3] * q[3 * 4 + j];
+        }
+    }
+    for (int r = 0; r < 3; r++) {
+        for (int j = 0; j < 3; j++) {
+            cs[r * 3 + j] = pq[r * 4 + 0] * P[j * 4 + 0] + pq[r * 4 + 1] * P[j * 4 + 1] +
+                            pq[r * 4 + 2] * P[j * 4 + 2] + pq[r * 4 + 3] * P[j * 4 + 3];
+        }
+    }
+    if (mvt_la_inv3(cs, cc) != MVT_OK) {
+        return MVT_ERR_NUMERIC;
+    }
+    /* conic: x^T A x + 2 b^T x + c0 = 0 -> (x - x0)^T A (x - x0) = k, x0 = -A^-1 b */
+    const mvt_real a[3] = {cc[0], MVT_R(0.5) * (cc[1] + cc[3]), cc[4]};
+    const mvt_real b[2] = {MVT_R(0.5) * (cc[2] + cc[6]), MVT_R(0.5) * (cc[5] + cc[7])};
+    const mvt_real det = a[0] * a[2] - a[1] * a[1];
+    if (!(det > MVT_R(0.0)) || !isfinite(det)) {
+        return MVT_ERR_NUMERIC; /* not an ellipse: the ellipsoid reaches the camera plane */
+    }
+    const mvt_real x0 = -(a[2] * b[0] - a[1] * b[1]) / det;
+    const mvt_real y0 = -(a[0] * b[1] - a[1] * b[0]) / det;
+    const mvt_real k = a[0] * x0 * x0 + MVT_R(2.0) * a[1] * x0 * y0 + a[2] * y0 * y0 - cc[8];
+    if (!(MVT_FABS(k) > MVT_R(0.0)) || !isfinite(k)) {
+        return MVT_ERR_NUMERIC;
+    }
+    const mvt_real w = P[8] * c[0] + P[9] * c[1] + P[10] * c[2] + P[11];
+    if (!(w > MVT_R(1e-3))) {
+        return MVT_ERR_BEHIND;
+    }
+    const mvt_real du = meas->ideal[0] - (P[0] * c[0] + P[1] * c[1] + P[2] * c[2] + P[3]) / w;
+    const mvt_real dv = meas->ideal[1] - (P[4] * c[0] + P[5] * c[1] + P[6] * c[2] + P[7]) / w;
+    const mvt_real m2 = (a[0] * du * du + MVT_R(2.0) * a[1] * du * dv + a[2] * dv * dv) / k;
+    if (!(m2 >= MVT_R(0.0))) {
+        return MVT_ERR_NUMERIC;
+    }
+    *dist = MVT_SQRT(m2);
+    return MVT_OK;
+}

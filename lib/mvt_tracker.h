@@ -1,0 +1,161 @@
+/*
+ * mvt_tracker.h - multi-view 3D tracker: the per-frame loop over the core's components.
+ *
+ * One call per frame set: predict -> gate -> associate (per camera, in capture-time order) ->
+ * update -> delete -> initiate. The caller owns the mvt_tracker_t (about sizeof(mvt_tracker_t)
+ * bytes, reported by mvt-footprint); nothing is allocated, nothing is printed.
+ *
+ * Filters (mvt_tracker_config_t.filter):
+ *   MVT_FILTER_PROJECTIVE   each camera's pixels update the 3D state directly (PKF family;
+ *                           linearisation in .lin, gate in .gate)
+ *   MVT_FILTER_TRIANGULATE  the baseline of the PKF paper: per frame triangulate the point from
+ *                           the views (robustly), then a 6-state constant-velocity Kalman update
+ */
+#ifndef MVT_TRACKER_H
+#define MVT_TRACKER_H
+
+#include "mvt_camera.h"
+#include "mvt_cv.h"
+#include "mvt_pkf.h"
+#include "mvt_tri.h"
+
+typedef enum mvt_filter {
+    MVT_FILTER_PROJECTIVE = 0,
+    MVT_FILTER_TRIANGULATE = 1
+} mvt_filter_t;
+
+typedef enum mvt_gate {
+    MVT_GATE_CHI2 = 0,  /* innovation y^T S^-1 y <= gate_chi2 (2 dof per camera) */
+    MVT_GATE_PAPER = 1  /* Eq. 22-26: distance to the projected ellipsoid <= paper_delta */
+} mvt_gate_t;
+
+enum { MVT_TRACK_TENTATIVE = 1, MVT_TRACK_CONFIRMED = 2, MVT_TRACK_COASTING = 3 };
+
+typedef struct mvt_tracker_config {
+    mvt_filter_t filter;        /* default MVT_FILTER_PROJECTIVE */
+    mvt_pkf_lin_t lin;          /* default MVT_PKF_JACOBIAN */
+    mvt_gate_t gate;            /* default MVT_GATE_CHI2 */
+    mvt_real q_m2s3[3];         /* white-noise acceleration spectral density per axis, m^2/s^3,
+                                   > 0; default 0.5, 0.5, 0.05 (learn it: tools/mvtrack learn-q) */
+    mvt_real gate_chi2;         /* chi-square gate, 2 dof; default 13.8 (0.1 % false rejection) */
+    mvt_real paper_gamma;       /* Eq. 23 gamma; default 6 */
+    mvt_real paper_var_m2[3];   /* Eq. 23 per-axis variance of the frame-to-frame position change
+                                   (the paper's "Q learnt from ground truth"); default 0.04^2 m^2 */
+    mvt_real paper_delta;       /* Eq. 26 threshold on the normalised distance; default 1 */
+    mvt_real birth_reproj_sigma;/* births: max reprojection error per view, in units of the
+                                   detection's sigma; default 4 */
+    mvt_real birth_min_reproj_px;/* ... but never below this many pixels; default 4 */
+    int birth_min_views;        /* views that must agree for a birth, >= 2; default 2 */
+    mvt_real birth_min_sep_m;   /* no birth closer than this to an existing track; default 0.4 */
+    mvt_real init_vel_std_ms;   /* velocity std of a new track, m/s; default 1.0 */
+    int confirm_hits;           /* M of the last confirm_window frames updated -> confirmed; 3 */
+    int confirm_window;         /* N, 1..32; default 5 */
+    int tentative_max_misses;   /* consecutive misses that delete a tentative track; default 2 */
+    mvt_real coast_max_s;       /* a confirmed track unseen this long is deleted; default 1.0 */
+    mvt_real max_pos_std_m;     /* ... or when its position std exceeds this; default 1.0 */
+    mvt_real volume_min[3];     /* tracked volume, metres (rig file) */
+    mvt_real volume_max[3];
+    mvt_real volume_margin_m;   /* births and tracks may be this far outside; default 0.5 */
+    mvt_real var_floor_m2;      /* covariance diagonal floor; default 1e-10 */
+} mvt_tracker_config_t;
+
+/* One detection as the core needs it (raw distorted pixels). */
+typedef struct mvt_detection {
+    mvt_real u, v;        /* pixels */
+    mvt_real sigma_px;    /* <= 0: the camera's default */
+    mvt_real score;       /* [0, 1] */
+    mvt_real hue, saturation; /* < 0 unknown */
+} mvt_detection_t;
+
+/* What one camera delivered for this frame set. */
+typedef struct mvt_view {
+    int observed;         /* 0: the camera did not report (not observed, not "saw nothing") */
+    int64_t utime_us;     /* capture time */
+    int num_detections;   /* 0..MVT_MAX_DETECTIONS (larger is counted and clamped) */
+    mvt_detection_t det[MVT_MAX_DETECTIONS];
+} mvt_view_t;
+
+typedef struct mvt_frame {
+    int64_t utime_us;     /* the time the output refers to (>= every view's utime) */
+    mvt_view_t views[MVT_MAX_CAMERAS]; /* indexed like the rig's cameras */
+} mvt_frame_t;
+
+typedef struct mvt_track_out {
+    int32_t id;
+    int32_t status;             /* MVT_TRACK_* */
+    mvt_real pos_m[3];
+    mvt_real vel_ms[3];
+    mvt_real cov_m2[6];         /* xx xy xz yy yz zz */
+    uint32_t cameras_used;      /* bit k: camera k updated the track this frame */
+    mvt_real extent_min[3];     /* position -/+ 2 sigma */
+    mvt_real extent_max[3];
+    mvt_real hue, saturation;   /* < 0 unknown */
+} mvt_track_out_t;
+
+typedef struct mvt_output {
+    int64_t utime_us;
+    int num_tracks;
+    mvt_track_out_t tracks[MVT_MAX_TARGETS];
+} mvt_output_t;
+
+/* Counters of what the tracker refused or repaired. Never reset by the library. */
+typedef struct mvt_counters {
+    uint64_t frames;
+    uint64_t frames_time_backwards;   /* frame utime earlier than the previous one: skipped */
+    uint64_t detections_over_capacity;/* beyond MVT_MAX_DETECTIONS: dropped */
+    uint64_t detections_nonfinite;    /* NaN / Inf coordinates or sigma: dropped */
+    uint64_t detections_undistort_failed; /* outside the lens model's invertible region */
+    uint64_t views_unknown_camera;    /* observed views beyond the rig's camera count */
+    uint64_t updates;                 /* camera updates applied */
+    uint64_t gated_out;               /* track-camera pairs whose best detection failed the gate */
+    uint64_t behind_camera;           /* track-camera pairs skipped: point behind the camera */
+    uint64_t numeric_faults;          /* covariance repaired or track dropped as non-PD */
+    uint64_t births;
+    uint64_t births_refused_full;     /* MVT_MAX_TARGETS reached */
+    uint64_t deletions;
+} mvt_counters_t;
+
+typedef struct mvt_track {
+    int32_t id;                 /* 0: free slot */
+    int32_t status;
+    mvt_cv_state_t s;
+    uint32_t cameras_used;      /* this frame */
+    uint32_t hit_history;       /* bit 0: this frame had an update, bit 1: previous, ... */
+    int32_t misses;             /* consecutive frames without update */
+    int64_t last_update_us;
+} mvt_track_t;
+
+typedef struct mvt_tracker {
+    mvt_tracker_config_t cfg;
+    int num_cameras;
+    mvt_camera_t cams[MVT_MAX_CAMERAS];
+    mvt_track_t tracks[MVT_MAX_TARGETS];
+    int32_t next_id;
+    int64_t last_utime_us;
+    int have_time;
+    mvt_counters_t counters;
+    /* per-frame workspaces (no state carried between frames) */
+    mvt_pkf_meas_t meas[MVT_MAX_CAMERAS][MVT_MAX_DETECTIONS];
+    uint8_t meas_ok[MVT_MAX_CAMERAS][MVT_MAX_DETECTIONS];
+    uint8_t used[MVT_MAX_CAMERAS][MVT_MAX_DETECTIONS];
+    int num_meas[MVT_MAX_CAMERAS];
+    mvt_real cost[MVT_MAX_TARGETS][MVT_MAX_DETECTIONS];
+} mvt_tracker_t;
+
+/* Fills cfg with the documented defaults (volume: a 10 m cube around the origin, z >= 0). */
+void mvt_tracker_config_default(mvt_tracker_config_t *cfg);
+
+/* Checks cfg (ranges above) and the cameras, and resets the tracker. num_cameras 1..MVT_MAX_CAMERAS.
+ * MVT_ERR_INVALID on a bad configuration. */
+mvt_err_t mvt_tracker_init(mvt_tracker_t *self, const mvt_tracker_config_t *cfg, const mvt_camera_t *cams,
+                           int num_cameras);
+
+/* Processes one frame set and fills out (may be NULL). Worst case O(C * T * D) for association
+ * plus O(C^2 * D^2 * C * D) for births with C cameras, T tracks, D detections per camera.
+ * MVT_ERR_INVALID (counted, state unchanged) when frame->utime_us is earlier than the last frame. */
+mvt_err_t mvt_tracker_step(mvt_tracker_t *self, const mvt_frame_t *frame, mvt_output_t *out);
+
+/* Fills out with the current tracks (no processing). */
+void mvt_tracker_output(const mvt_tracker_t *self, int64_t utime_us, mvt_output_t *out);
+
+#endif /* MVT_TRACKER_H */
