@@ -15,6 +15,10 @@
 
 #include "mvt_types.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /* Calibration as a rig file gives it. Copied by mvt_cam_init; the caller may discard it. */
 typedef struct mvt_camera_params {
     mvt_real camera_matrix[9];  /* K, row-major: fx skew cx; 0 fy cy; 0 0 1 (pixels) */
@@ -65,5 +69,9 @@ void mvt_cam_normalised_to_ideal(const mvt_camera_t *cam, const mvt_real xn[2], 
 /* Back-projected ray of a raw pixel: origin = camera centre, dir = unit world direction. */
 mvt_err_t mvt_cam_ray(const mvt_camera_t *cam, const mvt_real uv[2], mvt_real origin[3],
                       mvt_real dir[3]);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif /* MVT_CAMERA_H */

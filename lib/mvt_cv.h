@@ -15,6 +15,10 @@
 
 #include "mvt_types.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 typedef struct mvt_cv_state {
     mvt_real x[6];    /* X Y Z (m), Vx Vy Vz (m/s) */
     mvt_real P[36];   /* covariance, row-major, kept symmetric */
@@ -46,5 +50,9 @@ mvt_err_t mvt_cv_repair(mvt_cv_state_t *s, mvt_real var_floor);
  * P <- (I - K H) P (I - K H)^T + K R K^T with H = [Hp 0] (m x 3 block), K (6 x m), R (m x m),
  * all row-major, m <= 3. Shared by the point and projective updates. */
 void mvt_cv_joseph(mvt_cv_state_t *s, int m, const mvt_real *hp, const mvt_real *k, const mvt_real *r);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif /* MVT_CV_H */

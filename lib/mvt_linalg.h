@@ -7,6 +7,10 @@
 
 #include "mvt_types.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 #define MVT_LA_MAX_N 8
 
 /* In-place Cholesky A = L L^T of a symmetric n x n matrix (upper triangle ignored, lower
@@ -27,5 +31,9 @@ void mvt_la_rodrigues(const mvt_real rvec[3], mvt_real r[9]);
 
 /* 1 when every one of the n values is finite. */
 int mvt_la_all_finite(const mvt_real *x, int n);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif /* MVT_LINALG_H */

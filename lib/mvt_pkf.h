@@ -22,6 +22,10 @@
 #include "mvt_camera.h"
 #include "mvt_cv.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 typedef enum mvt_pkf_lin {
     MVT_PKF_JACOBIAN = 0,
     MVT_PKF_PAPER = 1,
@@ -65,5 +69,9 @@ mvt_err_t mvt_pkf_update(mvt_cv_state_t *s, const mvt_pkf_innov_t *in);
 mvt_err_t mvt_pkf_paper_distance(const mvt_cv_state_t *s, const mvt_camera_t *cam,
                                  const mvt_real var_m2[3], mvt_real gamma,
                                  const mvt_pkf_meas_t *meas, mvt_real *dist);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif /* MVT_PKF_H */

@@ -19,6 +19,10 @@
 #include "mvt_pkf.h"
 #include "mvt_tri.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 typedef enum mvt_filter {
     MVT_FILTER_PROJECTIVE = 0,
     MVT_FILTER_TRIANGULATE = 1
@@ -157,5 +161,9 @@ mvt_err_t mvt_tracker_step(mvt_tracker_t *self, const mvt_frame_t *frame, mvt_ou
 
 /* Fills out with the current tracks (no processing). */
 void mvt_tracker_output(const mvt_tracker_t *self, int64_t utime_us, mvt_output_t *out);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif /* MVT_TRACKER_H */

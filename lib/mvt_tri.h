@@ -9,6 +9,10 @@
 
 #include "mvt_camera.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /* One view of the point: camera index into the camera array and its undistorted normalised
  * coordinates (mvt_cam_undistort), with pixel variance. */
 typedef struct mvt_tri_obs {
@@ -37,5 +41,9 @@ mvt_err_t mvt_tri_covariance(const mvt_camera_t *cams, const mvt_tri_obs_t *obs,
  * NULL. MVT_ERR_DEGENERATE when fewer than 2 views agree. */
 mvt_err_t mvt_tri_robust(const mvt_camera_t *cams, const mvt_tri_obs_t *obs, int n, mvt_real thresh_px,
                          mvt_real x[3], uint32_t *inliers, int *n_inliers);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif /* MVT_TRI_H */

@@ -26,7 +26,15 @@ typedef enum mvt_err {
 #define MVT_ASSERT(x) assert(x)
 #endif
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /* Name of an error code, for logs. Never NULL. */
 const char *mvt_err_str(mvt_err_t err);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif /* MVT_TYPES_H */

@@ -1,0 +1,609 @@
+/*
+ * mvtrackd - multi-camera 3D people tracker daemon (CONTRACT section 3).
+ *
+ * LCM in: DETECTIONS_.* (mvtrack.camera_frame_t). LCM out: TRACKS (mvtrack.tracks_t) every
+ * processed frame set, MVTRACK_STATUS (mvtrack.status_t) about once a second.
+ * The tracking maths live in lib/; this file is transport, validation and bookkeeping.
+ */
+#define _POSIX_C_SOURCE 200809L
+#include <errno.h>
+#include <getopt.h>
+#include <math.h>
+#include <poll.h>
+#include <signal.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include <lcm/lcm.h>
+
+#include "assembler.h"
+#include "mvt_tracker.h"
+#include "mvtrack_camera_frame_t.h"
+#include "mvtrack_status_t.h"
+#include "mvtrack_tracks_t.h"
+#include "rig.h"
+
+#define DEFAULT_URL "udpm://239.255.76.67:7667?ttl=0"
+#define PROC_RING 512
+
+enum log_class { LOG_UNDECODABLE, LOG_UNKNOWN_CAMERA, LOG_BAD_VALUE, LOG_CAPACITY, LOG_TIME, LOG_TRACKER, LOG_NCLASS };
+
+typedef struct daemon_state {
+    const char *mode_name;
+    mvtd_rig_t rig;
+    mvt_tracker_t tracker;
+    mvtd_asm_t assembler;
+    mvt_output_t output;
+    lcm_t *lcm_in;
+    lcm_t *lcm_out;
+    int offline;
+    int verbose;
+    double start_wall_s;
+    int64_t frames_processed;
+    /* rejected input by reason (never reset) */
+    int64_t rej_undecodable, rej_unknown_camera, rej_bad_value, rej_over_capacity, rej_time_backwards, rej_late,
+        rej_duplicate;
+    int64_t cam_messages[MVT_MAX_CAMERAS];
+    int64_t cam_messages_at_last_status[MVT_MAX_CAMERAS];
+    double cam_last_wall_s[MVT_MAX_CAMERAS];
+    double last_status_wall_s;
+    double last_accept_wall_s;
+    float proc_ms[PROC_RING];
+    float latency_ms[PROC_RING];
+    int n_proc;
+    double log_last_s[LOG_NCLASS];
+    int64_t log_suppressed[LOG_NCLASS];
+    uint64_t tracker_births_full_seen;
+    mvt_view_t scratch_view;
+} daemon_state_t;
+
+static volatile sig_atomic_t g_stop = 0;
+
+static void on_signal(int sig)
+{
+    (void)sig;
+    g_stop = 1;
+}
+
+static double wall_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
+}
+
+static int64_t wall_utime(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_REALTIME, &ts);
+    return (int64_t)ts.tv_sec * 1000000 + ts.tv_nsec / 1000;
+}
+
+/* stderr at a bounded rate: one line per class per second, with the count of suppressed lines. */
+static void log_limited(daemon_state_t *d, enum log_class cls, const char *fmt, ...)
+{
+    const double now = wall_s();
+    if (now - d->log_last_s[cls] < 1.0) {
+        d->log_suppressed[cls]++;
+        return;
+    }
+    d->log_last_s[cls] = now;
+    va_list ap;
+    va_start(ap, fmt);
+    fprintf(stderr, "mvtrackd: ");
+    vfprintf(stderr, fmt, ap);
+    va_end(ap);
+    if (d->log_suppressed[cls] > 0) {
+        fprintf(stderr, " (+%lld similar suppressed)", (long long)d->log_suppressed[cls]);
+        d->log_suppressed[cls] = 0;
+    }
+    fputc('\n', stderr);
+}
+
+static int cmp_float(const void *a, const void *b)
+{
+    const float x = *(const float *)a, y = *(const float *)b;
+    return (x > y) - (x < y);
+}
+
+static float percentile(float *v, int n, double p)
+{
+    if (n <= 0) {
+        return 0.0f;
+    }
+    qsort(v, (size_t)n, sizeof(float), cmp_float);
+    int i = (int)ceil(p * (double)n) - 1;
+    i = i < 0 ? 0 : (i >= n ? n - 1 : i);
+    return v[i];
+}
+
+static void publish_status(daemon_state_t *d)
+{
+    const double now = wall_s();
+    const double period = now - d->last_status_wall_s;
+    mvtrack_status_t st;
+    memset(&st, 0, sizeof(st));
+    mvtrack_camera_status_t cams[MVT_MAX_CAMERAS];
+    st.utime = wall_utime();
+    st.uptime_s = (float)(now - d->start_wall_s);
+    st.mode = (char *)d->mode_name;
+    st.frames_processed = d->frames_processed;
+    st.frame_sets_complete = (int64_t)d->assembler.counters.sets_complete;
+    st.frame_sets_partial = (int64_t)d->assembler.counters.sets_partial;
+    st.num_cameras = (int16_t)d->rig.num_cameras;
+    st.cameras = cams;
+    for (int k = 0; k < d->rig.num_cameras; k++) {
+        cams[k].name = d->rig.names[k];
+        cams[k].messages = d->cam_messages[k];
+        cams[k].rate_hz =
+            period > 0.0 ? (float)((double)(d->cam_messages[k] - d->cam_messages_at_last_status[k]) / period) : 0.0f;
+        cams[k].last_message_age_s = d->cam_last_wall_s[k] > 0.0 ? (float)(now - d->cam_last_wall_s[k]) : -1.0f;
+        cams[k].frames_missing = (int64_t)d->assembler.counters.missing[k];
+        d->cam_messages_at_last_status[k] = d->cam_messages[k];
+    }
+    st.rejected_undecodable = d->rej_undecodable;
+    st.rejected_unknown_camera = d->rej_unknown_camera;
+    st.rejected_bad_value = d->rej_bad_value + (int64_t)d->tracker.counters.detections_nonfinite +
+                            (int64_t)d->tracker.counters.detections_undistort_failed;
+    st.rejected_over_capacity = d->rej_over_capacity;
+    st.rejected_time_backwards = d->rej_time_backwards;
+    st.rejected_late = d->rej_late;
+    st.rejected_duplicate = d->rej_duplicate;
+    float tmp[PROC_RING];
+    const int n = d->n_proc < PROC_RING ? d->n_proc : PROC_RING;
+    memcpy(tmp, d->proc_ms, (size_t)n * sizeof(float));
+    st.proc_ms_p50 = percentile(tmp, n, 0.5);
+    st.proc_ms_p99 = percentile(tmp, n, 0.99);
+    st.proc_ms_max = n > 0 ? tmp[n - 1] : 0.0f;
+    memcpy(tmp, d->latency_ms, (size_t)n * sizeof(float));
+    st.latency_ms_p50 = percentile(tmp, n, 0.5);
+    st.latency_ms_p99 = percentile(tmp, n, 0.99);
+    d->n_proc = 0;
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        const mvt_track_t *tr = &d->tracker.tracks[t];
+        if (tr->id == 0) {
+            continue;
+        }
+        if (tr->status == MVT_TRACK_TENTATIVE) {
+            st.tracks_tentative++;
+        } else if (tr->status == MVT_TRACK_CONFIRMED) {
+            st.tracks_confirmed++;
+        } else {
+            st.tracks_coasting++;
+        }
+    }
+    st.tracks_dropped_capacity = (int64_t)d->tracker.counters.births_refused_full;
+    mvtrack_status_t_publish(d->lcm_out, "MVTRACK_STATUS", &st);
+    d->last_status_wall_s = now;
+}
+
+static void on_frame(void *ctx, mvt_frame_t *frame, int complete)
+{
+    daemon_state_t *d = ctx;
+    (void)complete;
+    const double t0 = wall_s();
+    const mvt_err_t err = mvt_tracker_step(&d->tracker, frame, &d->output);
+    if (err != MVT_OK) {
+        log_limited(d, LOG_TRACKER, "frame at utime %lld skipped: %s", (long long)frame->utime_us, mvt_err_str(err));
+        return;
+    }
+    mvtrack_track_t tracks[MVT_MAX_TARGETS];
+    mvtrack_tracks_t msg;
+    msg.utime = d->output.utime_us;
+    msg.frame = d->frames_processed;
+    msg.num_tracks = (int16_t)d->output.num_tracks;
+    msg.tracks = tracks;
+    for (int i = 0; i < d->output.num_tracks; i++) {
+        const mvt_track_out_t *o = &d->output.tracks[i];
+        mvtrack_track_t *m = &tracks[i];
+        m->id = o->id;
+        m->status = (int8_t)o->status;
+        for (int a = 0; a < 3; a++) {
+            m->position[a] = (float)o->pos_m[a];
+            m->velocity[a] = (float)o->vel_ms[a];
+            m->extent_min[a] = (float)o->extent_min[a];
+            m->extent_max[a] = (float)o->extent_max[a];
+        }
+        for (int a = 0; a < 6; a++) {
+            m->position_covariance[a] = (float)o->cov_m2[a];
+        }
+        m->cameras_used = (int32_t)o->cameras_used;
+        m->hue = (float)o->hue;
+        m->saturation = (float)o->saturation;
+    }
+    msg.publish_utime = wall_utime();
+    mvtrack_tracks_t_publish(d->lcm_out, "TRACKS", &msg);
+    d->frames_processed++;
+    const double t1 = wall_s();
+    const int slot = d->n_proc % PROC_RING;
+    d->proc_ms[slot] = (float)((t1 - t0) * 1e3);
+    d->latency_ms[slot] = (float)((t1 - d->last_accept_wall_s) * 1e3);
+    d->n_proc++;
+    if (d->tracker.counters.births_refused_full > d->tracker_births_full_seen) {
+        d->tracker_births_full_seen = d->tracker.counters.births_refused_full;
+        log_limited(d, LOG_CAPACITY, "track capacity MVT_MAX_TARGETS=%d full: %llu births refused so far",
+                    MVT_MAX_TARGETS, (unsigned long long)d->tracker.counters.births_refused_full);
+    }
+}
+
+/* Keeps the MVT_MAX_DETECTIONS highest-score detections when a message has more. */
+static int keep_best(const mvtrack_camera_frame_t *m, int idx[MVT_MAX_DETECTIONS])
+{
+    int n = 0;
+    for (int i = 0; i < m->num_detections; i++) {
+        const float s = m->detections[i].score;
+        if (n < MVT_MAX_DETECTIONS) {
+            idx[n++] = i;
+            continue;
+        }
+        int worst = 0;
+        for (int j = 1; j < n; j++) {
+            if (m->detections[idx[j]].score < m->detections[idx[worst]].score) {
+                worst = j;
+            }
+        }
+        if (s > m->detections[idx[worst]].score) {
+            idx[worst] = i;
+        }
+    }
+    return n;
+}
+
+static void on_detections(const lcm_recv_buf_t *rbuf, const char *channel, void *ctx)
+{
+    daemon_state_t *d = ctx;
+    mvtrack_camera_frame_t m;
+    if (mvtrack_camera_frame_t_decode(rbuf->data, 0, (int)rbuf->data_size, &m) < 0) {
+        d->rej_undecodable++;
+        log_limited(d, LOG_UNDECODABLE, "undecodable message on %s (%u bytes) skipped", channel,
+                    (unsigned)rbuf->data_size);
+        return;
+    }
+    const int cam = mvtd_rig_find(&d->rig, m.camera != NULL ? m.camera : "");
+    if (cam < 0) {
+        d->rej_unknown_camera++;
+        log_limited(d, LOG_UNKNOWN_CAMERA, "message on %s names camera '%s', not in the rig: skipped", channel,
+                    m.camera != NULL ? m.camera : "");
+        mvtrack_camera_frame_t_decode_cleanup(&m);
+        return;
+    }
+    const mvt_camera_params_t *p = &d->rig.params[cam];
+    if (m.width != p->width || m.height != p->height) {
+        d->rej_bad_value++;
+        log_limited(d, LOG_BAD_VALUE, "camera %s sends %dx%d images, the rig says %dx%d: skipped", d->rig.names[cam],
+                    m.width, m.height, p->width, p->height);
+        mvtrack_camera_frame_t_decode_cleanup(&m);
+        return;
+    }
+    mvt_view_t *v = &d->scratch_view;
+    v->observed = 1;
+    v->utime_us = m.utime;
+    int idx[MVT_MAX_DETECTIONS];
+    const int n = keep_best(&m, idx);
+    if (m.num_detections > n) {
+        d->rej_over_capacity += m.num_detections - n;
+        log_limited(d, LOG_CAPACITY, "camera %s: %d detections, capacity MVT_MAX_DETECTIONS=%d: lowest scores dropped",
+                    d->rig.names[cam], m.num_detections, MVT_MAX_DETECTIONS);
+    }
+    int kept = 0;
+    for (int i = 0; i < n; i++) {
+        const mvtrack_detection_t *s = &m.detections[idx[i]];
+        if (!isfinite(s->u) || !isfinite(s->v) || !isfinite(s->sigma_px) || fabsf(s->u) > 1e6f ||
+            fabsf(s->v) > 1e6f) {
+            d->rej_bad_value++;
+            log_limited(d, LOG_BAD_VALUE, "camera %s: detection with non-finite or absurd coordinates dropped",
+                        d->rig.names[cam]);
+            continue;
+        }
+        mvt_detection_t *o = &v->det[kept++];
+        o->u = (mvt_real)s->u;
+        o->v = (mvt_real)s->v;
+        o->sigma_px = (mvt_real)s->sigma_px;
+        o->score = (mvt_real)s->score;
+        o->hue = (mvt_real)s->hue;
+        o->saturation = (mvt_real)s->saturation;
+    }
+    v->num_detections = kept;
+    mvtrack_camera_frame_t_decode_cleanup(&m);
+
+    const double now = wall_s();
+    d->last_accept_wall_s = now;
+    const mvtd_asm_result_t r = mvtd_asm_add(&d->assembler, cam, v, now);
+    switch (r) {
+    case MVTD_ASM_ACCEPTED:
+        d->cam_messages[cam]++;
+        d->cam_last_wall_s[cam] = now;
+        break;
+    case MVTD_ASM_LATE:
+        d->rej_late++;
+        log_limited(d, LOG_TIME, "camera %s: message at utime %lld arrived after its frame set: skipped",
+                    d->rig.names[cam], (long long)v->utime_us);
+        break;
+    case MVTD_ASM_DUPLICATE:
+        d->rej_duplicate++;
+        log_limited(d, LOG_TIME, "camera %s: duplicate message at utime %lld skipped", d->rig.names[cam],
+                    (long long)v->utime_us);
+        break;
+    case MVTD_ASM_BACKWARDS:
+        d->rej_time_backwards++;
+        log_limited(d, LOG_TIME, "camera %s: utime %lld earlier than its previous message: skipped",
+                    d->rig.names[cam], (long long)v->utime_us);
+        break;
+    }
+}
+
+static void usage(FILE *f)
+{
+    fprintf(f,
+            "usage: mvtrackd --rig RIG.yaml [--in URL] [--out URL] [--mode MODE] [options]\n"
+            "\n"
+            "Fuses per-camera detections (LCM channels DETECTIONS_<camera>, mvtrack.camera_frame_t)\n"
+            "into 3D tracks published on TRACKS (mvtrack.tracks_t) every frame set, and its health\n"
+            "on MVTRACK_STATUS (mvtrack.status_t) about once a second.\n"
+            "\n"
+            "  --rig FILE          camera rig, OpenCV FileStorage YAML (required)\n"
+            "  --in URL            LCM input (default %s);\n"
+            "                      'file://LOG.lcm?speed=0' processes a log as fast as possible and\n"
+            "                      exits 0 at its end\n"
+            "  --out URL           LCM output (default: the input URL; required for file:// input,\n"
+            "                      e.g. 'file://OUT.lcm?mode=w')\n"
+            "  --mode MODE         pkf (default): projective Kalman filter fusing every camera's pixels\n"
+            "                                     directly in 3D, linearised with the projection's\n"
+            "                                     Jacobian (the EKF form; measured best, see README)\n"
+            "                      ekf          same as pkf\n"
+            "                      pkf-paper    the paper's literal H (Eq. 18), OpenCV pixel origin\n"
+            "                      pkf-centred  Eq. 18 with pixels centred on the principal point\n"
+            "                      kf           baseline: triangulate per frame, then a 3D Kalman filter\n"
+            "  --gate chi2|paper   association gate: innovation chi-square (default) or the paper's\n"
+            "                      projected ellipsoid (Eq. 22-26)\n"
+            "  --gate-chi2 X       chi-square threshold, 2 dof (default 13.8)\n"
+            "  --q QX,QY,QZ        process noise, white-acceleration density m^2/s^3 per axis\n"
+            "                      (default 0.5,0.5,0.05; tools/mvtrack learn-q estimates it)\n"
+            "  --sigma-px X        pixel noise for cameras without sigma_px in the rig (default 2)\n"
+            "  --deadline-ms X     live mode: process an incomplete frame set this long after its\n"
+            "                      first message (default 20)\n"
+            "  --verbose           print a line per status period\n"
+            "  --help              this text\n"
+            "\n"
+            "Exit status: 0 after SIGINT/SIGTERM or at the end of a file:// log; 2 on bad arguments\n"
+            "or rig; 1 when LCM cannot be opened.\n",
+            DEFAULT_URL);
+}
+
+static int parse_q(const char *s, mvt_real q[3])
+{
+    double a, b, c;
+    char extra;
+    if (sscanf(s, "%lf,%lf,%lf%c", &a, &b, &c, &extra) != 3 || !(a > 0) || !(b > 0) || !(c > 0) || !isfinite(a) ||
+        !isfinite(b) || !isfinite(c)) {
+        return -1;
+    }
+    q[0] = (mvt_real)a;
+    q[1] = (mvt_real)b;
+    q[2] = (mvt_real)c;
+    return 0;
+}
+
+static int parse_pos(const char *s, double *out)
+{
+    char *end = NULL;
+    errno = 0;
+    const double v = strtod(s, &end);
+    if (errno != 0 || end == s || *end != '\0' || !(v > 0.0) || !isfinite(v)) {
+        return -1;
+    }
+    *out = v;
+    return 0;
+}
+
+static daemon_state_t g_state; /* large (the tracker and its workspaces): static, not on the stack */
+
+int main(int argc, char **argv)
+{
+    daemon_state_t *d = &g_state;
+    const char *rig_path = NULL, *in_url = DEFAULT_URL, *out_url = NULL, *mode = "pkf", *gate = "chi2";
+    double sigma_px = 2.0, deadline_ms = 20.0, gate_chi2 = 13.8;
+    mvt_real q[3] = {MVT_R(0.5), MVT_R(0.5), MVT_R(0.05)};
+    static const struct option opts[] = {
+        {"rig", required_argument, 0, 'r'},      {"in", required_argument, 0, 'i'},
+        {"out", required_argument, 0, 'o'},      {"mode", required_argument, 0, 'm'},
+        {"gate", required_argument, 0, 'g'},     {"gate-chi2", required_argument, 0, 'c'},
+        {"q", required_argument, 0, 'q'},        {"sigma-px", required_argument, 0, 's'},
+        {"deadline-ms", required_argument, 0, 'd'}, {"verbose", no_argument, 0, 'v'},
+        {"help", no_argument, 0, 'h'},           {0, 0, 0, 0}};
+    int opt;
+    while ((opt = getopt_long(argc, argv, "r:i:o:m:g:c:q:s:d:vh", opts, NULL)) != -1) {
+        switch (opt) {
+        case 'r': rig_path = optarg; break;
+        case 'i': in_url = optarg; break;
+        case 'o': out_url = optarg; break;
+        case 'm': mode = optarg; break;
+        case 'g': gate = optarg; break;
+        case 'c':
+            if (parse_pos(optarg, &gate_chi2) != 0) {
+                fprintf(stderr, "mvtrackd: --gate-chi2 needs a positive number, got '%s'\n", optarg);
+                return 2;
+            }
+            break;
+        case 'q':
+            if (parse_q(optarg, q) != 0) {
+                fprintf(stderr, "mvtrackd: --q needs three positive numbers QX,QY,QZ, got '%s'\n", optarg);
+                return 2;
+            }
+            break;
+        case 's':
+            if (parse_pos(optarg, &sigma_px) != 0) {
+                fprintf(stderr, "mvtrackd: --sigma-px needs a positive number, got '%s'\n", optarg);
+                return 2;
+            }
+            break;
+        case 'd':
+            if (parse_pos(optarg, &deadline_ms) != 0) {
+                fprintf(stderr, "mvtrackd: --deadline-ms needs a positive number, got '%s'\n", optarg);
+                return 2;
+            }
+            break;
+        case 'v': d->verbose = 1; break;
+        case 'h': usage(stdout); return 0;
+        default: usage(stderr); return 2;
+        }
+    }
+    if (optind < argc) {
+        fprintf(stderr, "mvtrackd: unexpected argument '%s'\n", argv[optind]);
+        usage(stderr);
+        return 2;
+    }
+    if (rig_path == NULL) {
+        fprintf(stderr, "mvtrackd: --rig is required\n");
+        usage(stderr);
+        return 2;
+    }
+    mvt_tracker_config_t cfg;
+    mvt_tracker_config_default(&cfg);
+    if (strcmp(mode, "pkf") == 0 || strcmp(mode, "ekf") == 0) {
+        cfg.lin = MVT_PKF_JACOBIAN;
+    } else if (strcmp(mode, "pkf-paper") == 0) {
+        cfg.lin = MVT_PKF_PAPER;
+    } else if (strcmp(mode, "pkf-centred") == 0) {
+        cfg.lin = MVT_PKF_PAPER_CENTRED;
+    } else if (strcmp(mode, "kf") == 0) {
+        cfg.filter = MVT_FILTER_TRIANGULATE;
+    } else {
+        fprintf(stderr, "mvtrackd: unknown --mode '%s' (pkf, ekf, pkf-paper, pkf-centred, kf)\n", mode);
+        return 2;
+    }
+    if (strcmp(gate, "chi2") == 0) {
+        cfg.gate = MVT_GATE_CHI2;
+    } else if (strcmp(gate, "paper") == 0) {
+        cfg.gate = MVT_GATE_PAPER;
+    } else {
+        fprintf(stderr, "mvtrackd: unknown --gate '%s' (chi2, paper)\n", gate);
+        return 2;
+    }
+    cfg.gate_chi2 = (mvt_real)gate_chi2;
+    memcpy(cfg.q_m2s3, q, sizeof(q));
+    d->mode_name = mode;
+
+    char err[512];
+    if (mvtd_rig_load(rig_path, sigma_px, &d->rig, err, sizeof(err)) != 0) {
+        fprintf(stderr, "mvtrackd: %s\n", err);
+        return 2;
+    }
+    if (!d->rig.volume_given) {
+        fprintf(stderr, "mvtrackd: rig has no volume_min/volume_max; using the camera centres' box\n");
+    }
+    for (int i = 0; i < 3; i++) {
+        cfg.volume_min[i] = (mvt_real)d->rig.volume_min[i];
+        cfg.volume_max[i] = (mvt_real)d->rig.volume_max[i];
+    }
+    mvt_camera_t cams[MVT_MAX_CAMERAS];
+    for (int k = 0; k < d->rig.num_cameras; k++) {
+        if (mvt_cam_init(&cams[k], &d->rig.params[k]) != MVT_OK) {
+            fprintf(stderr, "mvtrackd: camera %s: invalid calibration\n", d->rig.names[k]);
+            return 2;
+        }
+    }
+    if (mvt_tracker_init(&d->tracker, &cfg, cams, d->rig.num_cameras) != MVT_OK) {
+        fprintf(stderr, "mvtrackd: invalid tracker configuration\n");
+        return 2;
+    }
+    d->offline = strncmp(in_url, "file://", 7) == 0;
+    if (out_url == NULL) {
+        if (d->offline) {
+            fprintf(stderr, "mvtrackd: file:// input needs --out (a log opened for reading cannot publish)\n");
+            return 2;
+        }
+        out_url = in_url;
+    }
+    d->lcm_in = lcm_create(in_url);
+    if (d->lcm_in == NULL) {
+        fprintf(stderr, "mvtrackd: cannot open LCM input '%s'\n", in_url);
+        return 1;
+    }
+    if (strcmp(out_url, in_url) == 0) {
+        d->lcm_out = d->lcm_in;
+    } else {
+        d->lcm_out = lcm_create(out_url);
+        if (d->lcm_out == NULL) {
+            fprintf(stderr, "mvtrackd: cannot open LCM output '%s'\n", out_url);
+            lcm_destroy(d->lcm_in);
+            return 1;
+        }
+    }
+    mvtd_asm_init(&d->assembler, d->rig.num_cameras, d->rig.frame_rate, on_frame, d);
+    lcm_subscription_t *sub = lcm_subscribe(d->lcm_in, "DETECTIONS_.*", on_detections, d);
+    if (!d->offline) {
+        lcm_subscription_set_queue_capacity(sub, 256);
+    }
+
+    struct sigaction sa;
+    memset(&sa, 0, sizeof(sa));
+    sa.sa_handler = on_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, NULL);
+    sigaction(SIGTERM, &sa, NULL);
+
+    d->start_wall_s = wall_s();
+    d->last_status_wall_s = d->start_wall_s;
+    fprintf(stderr, "mvtrackd: %d cameras, mode %s, gate %s, in %s, out %s\n", d->rig.num_cameras, mode, gate, in_url,
+            out_url);
+
+    const double deadline_s = deadline_ms * 1e-3;
+    if (d->offline) {
+        while (!g_stop) {
+            if (lcm_handle(d->lcm_in) != 0) {
+                break; /* end of log */
+            }
+            if (wall_s() - d->last_status_wall_s >= 1.0) {
+                publish_status(d);
+            }
+        }
+    } else {
+        const int fd = lcm_get_fileno(d->lcm_in);
+        while (!g_stop) {
+            double wait = 1.0 - (wall_s() - d->last_status_wall_s);
+            const double dl = mvtd_asm_time_to_deadline(&d->assembler, wall_s(), deadline_s);
+            if (dl > -1e29 && dl < wait) {
+                wait = dl;
+            }
+            const int timeout_ms = wait <= 0.0 ? 0 : (int)ceil(wait * 1e3);
+            struct pollfd pfd = {fd, POLLIN, 0};
+            const int pr = poll(&pfd, 1, timeout_ms);
+            if (pr < 0 && errno != EINTR) {
+                perror("mvtrackd: poll");
+                break;
+            }
+            if (pr > 0) {
+                while (lcm_handle_timeout(d->lcm_in, 0) > 0) { /* drain everything queued */
+                }
+            }
+            mvtd_asm_poll(&d->assembler, wall_s(), deadline_s);
+            if (wall_s() - d->last_status_wall_s >= 1.0) {
+                publish_status(d);
+                if (d->verbose) {
+                    fprintf(stderr, "mvtrackd: %lld frames, %lld complete, %lld partial\n",
+                            (long long)d->frames_processed, (long long)d->assembler.counters.sets_complete,
+                            (long long)d->assembler.counters.sets_partial);
+                }
+            }
+        }
+    }
+    mvtd_asm_flush(&d->assembler); /* the frame in hand */
+    publish_status(d);
+    fprintf(stderr,
+            "mvtrackd: done: %lld frames (%llu complete, %llu partial); rejected: %lld undecodable, %lld unknown "
+            "camera, %lld bad value, %lld over capacity, %lld time backwards, %lld late, %lld duplicate\n",
+            (long long)d->frames_processed, (unsigned long long)d->assembler.counters.sets_complete,
+            (unsigned long long)d->assembler.counters.sets_partial, (long long)d->rej_undecodable,
+            (long long)d->rej_unknown_camera, (long long)d->rej_bad_value, (long long)d->rej_over_capacity,
+            (long long)d->rej_time_backwards, (long long)d->rej_late, (long long)d->rej_duplicate);
+    lcm_unsubscribe(d->lcm_in, sub);
+    if (d->lcm_out != d->lcm_in) {
+        lcm_destroy(d->lcm_out);
+    }
+    lcm_destroy(d->lcm_in);
+    return 0;
+}

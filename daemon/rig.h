@@ -1,0 +1,37 @@
+/*
+ * rig.h - loads a rig file (CONTRACT section 2: OpenCV FileStorage YAML) into core camera
+ * parameters. C interface, implemented with cv::FileStorage.
+ */
+#ifndef MVTD_RIG_H
+#define MVTD_RIG_H
+
+#include <stddef.h>
+
+#include "mvt_camera.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define MVTD_NAME_MAX 64
+
+typedef struct mvtd_rig {
+    int num_cameras;
+    char names[MVT_MAX_CAMERAS][MVTD_NAME_MAX];
+    mvt_camera_params_t params[MVT_MAX_CAMERAS];
+    double volume_min[3], volume_max[3]; /* metres */
+    int volume_given;                    /* 0: derived from the camera centres */
+    double frame_rate;                   /* Hz */
+} mvtd_rig_t;
+
+/* Reads and checks path. Returns 0, or -1 with a one-line reason in err. */
+int mvtd_rig_load(const char *path, double default_sigma_px, mvtd_rig_t *rig, char *err, size_t err_len);
+
+/* Rig index of a camera name, or -1. */
+int mvtd_rig_find(const mvtd_rig_t *rig, const char *name);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* MVTD_RIG_H */
