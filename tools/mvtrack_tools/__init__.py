@@ -1,0 +1,1 @@
+"""mvtrack's Python tools: simulate scenes, replay logs, evaluate, plot."""

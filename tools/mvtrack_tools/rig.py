@@ -1,0 +1,183 @@
+"""Camera rigs: construction, CONTRACT section 2 rig files (cv2.FileStorage) and projection.
+
+Projection uses cv2.projectPoints, so the simulator and evaluation do not share code with the
+C core they test.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+
+@dataclass
+class Camera:
+    name: str
+    K: np.ndarray            # 3x3
+    dist: np.ndarray         # (5,) or (4,) or (8,)
+    rvec: np.ndarray         # (3,) world -> camera
+    tvec: np.ndarray         # (3,)
+    width: int = 768
+    height: int = 576
+    sigma_px: float = 2.0
+
+    @property
+    def R(self) -> np.ndarray:
+        return cv2.Rodrigues(self.rvec.reshape(3, 1))[0]
+
+    @property
+    def centre(self) -> np.ndarray:
+        return -self.R.T @ self.tvec
+
+    def depth(self, X: np.ndarray) -> np.ndarray:
+        X = np.atleast_2d(X)
+        return (X @ self.R.T + self.tvec)[:, 2]
+
+    def project(self, X: np.ndarray) -> np.ndarray:
+        """World points (N,3) -> raw distorted pixels (N,2)."""
+        X = np.atleast_2d(np.asarray(X, dtype=np.float64))
+        uv, _ = cv2.projectPoints(X.reshape(-1, 1, 3), self.rvec.reshape(3, 1), self.tvec.reshape(3, 1), self.K,
+                                  self.dist)
+        return uv.reshape(-1, 2)
+
+    def project_jacobian(self, X: np.ndarray) -> np.ndarray:
+        """d(u, v)/d(X, Y, Z) of one world point (2x3), from cv2.projectPoints' own Jacobian."""
+        X = np.asarray(X, dtype=np.float64).reshape(1, 1, 3)
+        _, J = cv2.projectPoints(X, self.rvec.reshape(3, 1), self.tvec.reshape(3, 1), self.K, self.dist)
+        d_rvec, d_tvec = J[:, 0:3], J[:, 3:6]
+        # X_cam = R X + t, so d/dX = d/dt * R
+        return d_tvec @ self.R
+
+    def in_image(self, uv: np.ndarray, margin: float = 0.0) -> np.ndarray:
+        uv = np.atleast_2d(uv)
+        return ((uv[:, 0] >= margin) & (uv[:, 0] <= self.width - 1 - margin) & (uv[:, 1] >= margin)
+                & (uv[:, 1] <= self.height - 1 - margin))
+
+
+@dataclass
+class Rig:
+    cameras: list[Camera]
+    volume_min: np.ndarray
+    volume_max: np.ndarray
+    frame_rate: float = 25.0
+    extra: dict = field(default_factory=dict)
+
+    def write(self, path: str | Path) -> None:
+        fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_WRITE)
+        fs.startWriteStruct("cameras", cv2.FileNode_SEQ)
+        for c in self.cameras:
+            fs.startWriteStruct("", cv2.FileNode_MAP)
+            fs.write("name", c.name)
+            fs.write("image_width", int(c.width))
+            fs.write("image_height", int(c.height))
+            fs.write("camera_matrix", np.asarray(c.K, dtype=np.float64))
+            fs.write("distortion_coefficients", np.asarray(c.dist, dtype=np.float64).reshape(1, -1))
+            fs.write("rvec", np.asarray(c.rvec, dtype=np.float64).reshape(3, 1))
+            fs.write("tvec", np.asarray(c.tvec, dtype=np.float64).reshape(3, 1))
+            fs.write("sigma_px", float(c.sigma_px))
+            fs.endWriteStruct()
+        fs.endWriteStruct()
+        fs.write("volume_min", np.asarray(self.volume_min, dtype=np.float64).reshape(3, 1))
+        fs.write("volume_max", np.asarray(self.volume_max, dtype=np.float64).reshape(3, 1))
+        fs.write("frame_rate", float(self.frame_rate))
+        fs.release()
+        # CONTRACT section 2 names the OpenCV 4 header; OpenCV 5 writes "%YAML 1.2".
+        text = Path(path).read_text()
+        if not text.startswith("%YAML:1.0"):
+            Path(path).write_text("%YAML:1.0\n" + text.split("\n", 1)[1])
+
+    @staticmethod
+    def read(path: str | Path) -> "Rig":
+        fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
+        if not fs.isOpened():
+            raise FileNotFoundError(path)
+        cams = []
+        node = fs.getNode("cameras")
+        for i in range(node.size()):
+            n = node.at(i)
+            dist_node = n.getNode("distortion_coefficients")
+            dist = dist_node.mat().ravel() if not dist_node.empty() else np.zeros(5)
+            sig = n.getNode("sigma_px")
+            cams.append(Camera(name=n.getNode("name").string(), K=n.getNode("camera_matrix").mat(), dist=dist,
+                               rvec=n.getNode("rvec").mat().ravel(), tvec=n.getNode("tvec").mat().ravel(),
+                               width=int(n.getNode("image_width").real()), height=int(n.getNode("image_height").real()),
+                               sigma_px=sig.real() if not sig.empty() else 2.0))
+        vmin = fs.getNode("volume_min").mat().ravel()
+        vmax = fs.getNode("volume_max").mat().ravel()
+        fr = fs.getNode("frame_rate")
+        rate = fr.real() if not fr.empty() else 25.0
+        fs.release()
+        return Rig(cams, vmin, vmax, rate)
+
+
+def look_at(name: str, position, target, K: np.ndarray, dist, width: int = 768, height: int = 576,
+            sigma_px: float = 2.0, roll_deg: float = 0.0) -> Camera:
+    """A camera at `position` looking at `target`, image y axis pointing down toward world -z."""
+    c = np.asarray(position, dtype=np.float64)
+    f = np.asarray(target, dtype=np.float64) - c
+    f /= np.linalg.norm(f)
+    up = np.array([0.0, 0.0, 1.0])
+    if abs(f @ up) > 0.99:  # looking straight down: pick world y as image "up"
+        up = np.array([0.0, 1.0, 0.0])
+    x = np.cross(f, up)
+    x /= np.linalg.norm(x)
+    y = np.cross(f, x)
+    R = np.stack([x, y, f])  # rows: camera axes in world
+    if roll_deg:
+        a = np.deg2rad(roll_deg)
+        Rz = np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]])
+        R = Rz @ R
+    rvec = cv2.Rodrigues(R)[0].ravel()
+    tvec = -R @ c
+    return Camera(name, np.asarray(K, dtype=np.float64), np.asarray(dist, dtype=np.float64), rvec, tvec, width, height,
+                  sigma_px)
+
+
+def intrinsics(fx: float, fy: float, cx: float, cy: float, skew: float = 0.0) -> np.ndarray:
+    return np.array([[fx, skew, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]])
+
+
+def smartroom(sigma_px: float = 2.0) -> Rig:
+    """The Experiment 1 rig: a 6 x 5 x 3 m room, four wide-angle cameras high in the corners and
+    one wide-angle zenithal camera, 768 x 576 at 25 fps (the PKF paper's UPC SmartRoom set-up;
+    the paper gives no geometry, this one is documented in docs/experiment1.md)."""
+    L, W = 6.0, 5.0
+    wide = intrinsics(420.0, 420.0, 383.5, 287.5)
+    d = [-0.22, 0.06, 0.0005, -0.0004, -0.006]
+    tgt = [L / 2, W / 2, 0.9]
+    cams = [
+        look_at("cam0", [0.15, 0.15, 2.75], tgt, wide, d, sigma_px=sigma_px),
+        look_at("cam1", [L - 0.15, 0.15, 2.75], tgt, wide, d, sigma_px=sigma_px),
+        look_at("cam2", [L - 0.15, W - 0.15, 2.75], tgt, wide, d, sigma_px=sigma_px),
+        look_at("cam3", [0.15, W - 0.15, 2.75], tgt, wide, d, sigma_px=sigma_px),
+        look_at("cam4", [L / 2, W / 2, 2.95], [L / 2, W / 2, 0.0], intrinsics(300.0, 300.0, 383.5, 287.5),
+                [-0.18, 0.035, 0.0, 0.0, -0.003], sigma_px=sigma_px),
+    ]
+    return Rig(cams, np.array([0.0, 0.0, 0.0]), np.array([L, W, 2.5]), 25.0)
+
+
+def random_rig(rng: np.random.Generator, n_cameras: int, room=(7.0, 6.0, 3.0), width: int | None = None,
+               height: int | None = None) -> Rig:
+    """A rig built differently from smartroom(): random room size, positions on the walls, random
+    intrinsics (focal, off-centre principal point, aspect, skew-free), random distortion of either
+    sign, random image size and roll. For generality tests."""
+    L = rng.uniform(4.0, room[0] + 2)
+    W = rng.uniform(4.0, room[1] + 2)
+    H = rng.uniform(2.6, room[2] + 0.5)
+    cams = []
+    for k in range(n_cameras):
+        a = 2 * np.pi * (k + rng.uniform(-0.3, 0.3)) / n_cameras
+        pos = np.array([L / 2 + 0.5 * L * np.cos(a) * 0.95, W / 2 + 0.5 * W * np.sin(a) * 0.95, H - rng.uniform(0.05, 0.6)])
+        tgt = np.array([L / 2 + rng.uniform(-0.7, 0.7), W / 2 + rng.uniform(-0.7, 0.7), rng.uniform(0.6, 1.2)])
+        w = width or int(rng.choice([640, 768, 1024, 1280]))
+        h = height or int(w * rng.choice([0.75, 0.5625]))
+        f = rng.uniform(0.45, 0.8) * w
+        K = intrinsics(f, f * rng.uniform(0.97, 1.03), w / 2 + rng.uniform(-0.06, 0.06) * w,
+                       h / 2 + rng.uniform(-0.06, 0.06) * h)
+        k1 = rng.uniform(-0.3, 0.1)
+        dist = [k1, rng.uniform(-0.02, 0.08), rng.uniform(-1e-3, 1e-3), rng.uniform(-1e-3, 1e-3), rng.uniform(-0.01, 0.005)]
+        cams.append(look_at(f"c{k}_{rng.integers(1000)}", pos, tgt, K, dist, w, h, sigma_px=2.0,
+                            roll_deg=rng.uniform(-8, 8)))
+    return Rig(cams, np.array([0.0, 0.0, 0.0]), np.array([L, W, 2.5]), 25.0)
