@@ -89,12 +89,12 @@ mvt_err_t mvt_la_inv3(const mvt_real a[9], mvt_real inv[9])
     const mvt_real c01 = a[5] * a[6] - a[3] * a[8];
     const mvt_real c02 = a[3] * a[7] - a[4] * a[6];
     const mvt_real det = a[0] * c00 + a[1] * c01 + a[2] * c02;
-    mvt_real scale = MVT_R(0.0);
-    for (int i = 0; i < 9; i++) {
-        const mvt_real m = MVT_FABS(a[i]);
-        scale = m > scale ? m : scale;
+    /* Hadamard: |det| <= product of the row norms; relative to it, det measures conditioning */
+    mvt_real h = MVT_R(1.0);
+    for (int r = 0; r < 3; r++) {
+        h *= MVT_SQRT(a[r * 3] * a[r * 3] + a[r * 3 + 1] * a[r * 3 + 1] + a[r * 3 + 2] * a[r * 3 + 2]);
     }
-    if (!isfinite(det) || MVT_FABS(det) <= MVT_R(1e3) * MVT_EPS * scale * scale * scale) {
+    if (!isfinite(det) || !(h > MVT_R(0.0)) || MVT_FABS(det) <= MVT_R(1e2) * MVT_EPS * h) {
         return MVT_ERR_NUMERIC;
     }
     const mvt_real id = MVT_R(1.0) / det;

@@ -23,7 +23,8 @@ void mvt_la_chol_solve(int n, const mvt_real *l, mvt_real *b);
 /* Inverse of a symmetric positive-definite 2x2 packed as (xx, xy, yy). MVT_ERR_NUMERIC if not PD. */
 mvt_err_t mvt_la_inv2_sym(const mvt_real s[3], mvt_real inv[3]);
 
-/* Inverse of a general 3x3 matrix. MVT_ERR_NUMERIC when |det| is below eps relative to its scale. */
+/* Inverse of a general 3x3 matrix. MVT_ERR_NUMERIC when |det| < 100 eps times the product of the
+ * row norms (its Hadamard bound): the matrix is numerically singular. */
 mvt_err_t mvt_la_inv3(const mvt_real a[9], mvt_real inv[9]);
 
 /* Rotation matrix from a Rodrigues vector (axis * angle, radians), as cv::Rodrigues. */

@@ -107,31 +107,28 @@ mvt_err_t mvt_pkf_update(mvt_cv_state_t *s, const mvt_pkf_innov_t *in)
 mvt_err_t mvt_pkf_paper_distance(const mvt_cv_state_t *s, const mvt_camera_t *cam, const mvt_real var_m2[3],
                                  mvt_real gamma, const mvt_pkf_meas_t *meas, mvt_real *dist)
 {
-    const mvt_real *P = cam->P;
+    /* Computed in normalised camera coordinates with M = [R | t] instead of P = K [R | t]: K is an
+     * affine map of the image plane, so the normalised conic distance is the same, and the
+     * numbers stay near 1 (a conic in pixels loses float precision). Translating the ellipsoid's
+     * centre c to the origin first keeps the dual quadric diagonal. */
+    const mvt_real *R = cam->R;
     const mvt_real *c = s->x;
-    /* Dual quadric of the ellipsoid centred at c: Q* = T diag(a^2, b^2, c^2, -1) T^T,
-     * T = [I c; 0 1], i.e. [D - c c^T, -c; -c^T, -1]. */
-    mvt_real q[16];
+    mvt_real tc[3]; /* camera-frame position of c */
     for (int i = 0; i < 3; i++) {
-        for (int j = 0; j < 3; j++) {
-            q[i * 4 + j] = (i == j ? gamma * var_m2[i] : MVT_R(0.0)) - c[i] * c[j];
-        }
-        q[i * 4 + 3] = -c[i];
-        q[3 * 4 + i] = -c[i];
+        tc[i] = R[i * 3 + 0] * c[0] + R[i * 3 + 1] * c[1] + R[i * 3 + 2] * c[2] + cam->t[i];
     }
-    q[15] = MVT_R(-1.0);
-    /* C* = P Q* P^T (3x3) */
-    mvt_real pq[12], cs[9], cc[9];
-    for (int r = 0; r < 3; r++) {
-        for (int j = 0; j < 4; j++) {
-            pq[r * 4 + j] = P[r * 4 + 0] * q[0 * 4 + j] + P[r * 4 + 1] * q[1 * 4 + j] +
-                            P[r * 4 + 2] * q[2 * 4 + j] + P[r * 4 + 3] * q[3 * 4 + j];
-        }
+    if (!(tc[2] > MVT_R(1e-3))) {
+        return MVT_ERR_BEHIND;
     }
-    for (int r = 0; r < 3; r++) {
-        for (int j = 0; j < 3; j++) {
-            cs[r * 3 + j] = pq[r * 4 + 0] * P[j * 4 + 0] + pq[r * 4 + 1] * P[j * 4 + 1] +
-                            pq[r * 4 + 2] * P[j * 4 + 2] + pq[r * 4 + 3] * P[j * 4 + 3];
+    /* C* = M' D M'^T with M' = [R | tc] and D = diag(gamma var, -1): R D3 R^T - tc tc^T */
+    mvt_real cs[9], cc[9];
+    for (int a = 0; a < 3; a++) {
+        for (int b = 0; b < 3; b++) {
+            mvt_real acc = -tc[a] * tc[b];
+            for (int k = 0; k < 3; k++) {
+                acc += R[a * 3 + k] * gamma * var_m2[k] * R[b * 3 + k];
+            }
+            cs[a * 3 + b] = acc;
         }
     }
     if (mvt_la_inv3(cs, cc) != MVT_OK) {
@@ -150,14 +147,16 @@ mvt_err_t mvt_pkf_paper_distance(const mvt_cv_state_t *s, const mvt_camera_t *ca
     if (!(MVT_FABS(k) > MVT_R(0.0)) || !isfinite(k)) {
         return MVT_ERR_NUMERIC;
     }
-    const mvt_real w = P[8] * c[0] + P[9] * c[1] + P[10] * c[2] + P[11];
-    if (!(w > MVT_R(1e-3))) {
-        return MVT_ERR_BEHIND;
-    }
-    const mvt_real du = meas->ideal[0] - (P[0] * c[0] + P[1] * c[1] + P[2] * c[2] + P[3]) / w;
-    const mvt_real dv = meas->ideal[1] - (P[4] * c[0] + P[5] * c[1] + P[6] * c[2] + P[7]) / w;
+    /* the detection in normalised pinhole coordinates (from the ideal pixels: K^-1) */
+    const mvt_real yn = (meas->ideal[1] - cam->cy) / cam->fy;
+    const mvt_real xn = (meas->ideal[0] - cam->cx - cam->skew * yn) / cam->fx;
+    /* measured from the outline's own centre x0 (Eq. 25 writes psi(s), the projected centre of
+     * the ellipsoid, which under perspective is not the outline's centre): dist <= 1 exactly
+     * when the detection lies inside the projected ellipsoid */
+    const mvt_real du = xn - x0;
+    const mvt_real dv = yn - y0;
     const mvt_real m2 = (a[0] * du * du + MVT_R(2.0) * a[1] * du * dv + a[2] * dv * dv) / k;
-    if (!(m2 >= MVT_R(0.0))) {
+    if (!(m2 >= MVT_R(0.0)) || !isfinite(m2)) {
         return MVT_ERR_NUMERIC;
     }
     *dist = MVT_SQRT(m2);

@@ -65,7 +65,7 @@ mvt_err_t mvt_pkf_update(mvt_cv_state_t *s, const mvt_pkf_innov_t *in);
  * around the predicted position is projected through camera cam as the outline conic of its dual
  * quadric (V proportional to (P W^-1 P^T)^-1); V is scaled so that the projected ellipse's
  * boundary is at distance 1 (the paper leaves the scale open). dist = sqrt(d^T V d), d = ideal
- * detection minus projected prediction. MVT_ERR_BEHIND / MVT_ERR_NUMERIC on bad geometry. */
+ * detection minus the outline's centre (so dist <= 1 exactly inside the projected ellipsoid). MVT_ERR_BEHIND / MVT_ERR_NUMERIC on bad geometry. */
 mvt_err_t mvt_pkf_paper_distance(const mvt_cv_state_t *s, const mvt_camera_t *cam,
                                  const mvt_real var_m2[3], mvt_real gamma,
                                  const mvt_pkf_meas_t *meas, mvt_real *dist);

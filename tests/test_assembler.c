@@ -1,0 +1,113 @@
+/* Unit tests of the daemon's frame assembler: completeness, proof by a later frame, late,
+ * duplicate and backwards messages, deadline. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <string.h>
+
+#include "assembler.h"
+
+static mvtd_asm_t g_asm;
+static int g_emitted;
+static int g_complete;
+static int64_t g_utime;
+static uint32_t g_observed;
+
+static void on_emit(void *ctx, mvt_frame_t *f, int complete)
+{
+    (void)ctx;
+    g_emitted++;
+    g_complete = complete;
+    g_utime = f->utime_us;
+    g_observed = 0;
+    for (int k = 0; k < MVT_MAX_CAMERAS; k++) g_observed |= (uint32_t)(f->views[k].observed != 0) << k;
+}
+
+static mvtd_asm_result_t add(int cam, int64_t utime, double wall)
+{
+    mvt_view_t v;
+    memset(&v, 0, sizeof(v));
+    v.observed = 1;
+    v.utime_us = utime;
+    return mvtd_asm_add(&g_asm, cam, &v, wall);
+}
+
+static void setup_asm(int ncam)
+{
+    g_emitted = 0;
+    mvtd_asm_init(&g_asm, ncam, 25.0, on_emit, NULL);
+}
+
+static void test_mvtd_asm_add_all_cameras_emits_complete_set(void **state)
+{
+    (void)state;
+    setup_asm(3);
+    assert_int_equal(add(1, 1000000, 0), MVTD_ASM_ACCEPTED);
+    assert_int_equal(add(0, 1002000, 0), MVTD_ASM_ACCEPTED); /* +2 ms capture jitter */
+    assert_int_equal(g_emitted, 0);
+    assert_int_equal(add(2, 999000, 0), MVTD_ASM_ACCEPTED);
+    assert_int_equal(g_emitted, 1);
+    assert_int_equal(g_complete, 1);
+    assert_int_equal(g_utime, 1002000); /* the latest capture time of the set */
+    assert_int_equal(g_observed, 7);
+}
+
+static void test_mvtd_asm_add_later_frame_proves_partial_set(void **state)
+{
+    (void)state;
+    setup_asm(3);
+    add(0, 1000000, 0);
+    add(2, 1000000, 0);
+    assert_int_equal(g_emitted, 0);
+    add(0, 1040000, 0); /* next frame: camera 1 never came */
+    assert_int_equal(g_emitted, 1);
+    assert_int_equal(g_complete, 0);
+    assert_int_equal(g_observed, 5);
+    assert_int_equal(g_asm.counters.missing[1], 1);
+    /* camera 1's late message for the emitted frame is refused */
+    assert_int_equal(add(1, 1000000, 0), MVTD_ASM_LATE);
+    assert_int_equal(g_asm.counters.late, 1);
+}
+
+static void test_mvtd_asm_add_duplicate_and_backwards_refused(void **state)
+{
+    (void)state;
+    setup_asm(2);
+    add(0, 1000000, 0);
+    assert_int_equal(add(0, 1000000, 0), MVTD_ASM_DUPLICATE);
+    assert_int_equal(add(0, 990000, 0), MVTD_ASM_BACKWARDS);
+    assert_int_equal(add(0, 1001000, 0), MVTD_ASM_DUPLICATE); /* same camera twice in one set */
+    assert_int_equal(g_emitted, 0);
+    assert_int_equal(g_asm.counters.duplicate, 2);
+    assert_int_equal(g_asm.counters.backwards, 1);
+}
+
+static void test_mvtd_asm_poll_deadline_emits_open_set(void **state)
+{
+    (void)state;
+    setup_asm(4);
+    add(3, 1000000, 10.0);
+    mvtd_asm_poll(&g_asm, 10.010, 0.020);
+    assert_int_equal(g_emitted, 0);
+    assert_true(mvtd_asm_time_to_deadline(&g_asm, 10.010, 0.020) > 0.0);
+    mvtd_asm_poll(&g_asm, 10.021, 0.020);
+    assert_int_equal(g_emitted, 1);
+    assert_int_equal(g_complete, 0);
+    assert_true(mvtd_asm_time_to_deadline(&g_asm, 11, 0.020) < -1e29);
+    mvtd_asm_flush(&g_asm); /* nothing open: nothing emitted */
+    assert_int_equal(g_emitted, 1);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_mvtd_asm_add_all_cameras_emits_complete_set),
+        cmocka_unit_test(test_mvtd_asm_add_later_frame_proves_partial_set),
+        cmocka_unit_test(test_mvtd_asm_add_duplicate_and_backwards_refused),
+        cmocka_unit_test(test_mvtd_asm_poll_deadline_emits_open_set),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,368 @@
+/*
+ * Oracle tests: the core against independent double-precision references.
+ *  - camera model against OpenCV (cv::projectPoints, its Jacobian, cv::undistortPoints, cv::Rodrigues);
+ *  - the projective filters against an Eigen implementation of the paper's 8x8 homogeneous form
+ *    (state [X Y Z 1 Vx Vy Vz 0], F of Eq. 16 with the real dt, H of Eq. 18 or the Jacobian,
+ *    dense Kalman equations 7-11 with the Joseph covariance update);
+ *  - the paper's gate (Eq. 22-26) against an Eigen dual-quadric projection and the geometric fact
+ *    that every projected point of the ellipsoid lies inside its outline.
+ */
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <vector>
+
+#include <Eigen/Dense>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core.hpp>
+
+extern "C" {
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+}
+
+#include "mvt_pkf.h"
+#include "mvt_tracker.h"
+#include "test_support.h"
+
+using Mat8 = Eigen::Matrix<double, 8, 8>;
+using Vec8 = Eigen::Matrix<double, 8, 1>;
+
+static const double POS_TOL = MVT_USE_DOUBLE ? 1e-9 : 2e-4;   /* metres */
+static const double PX_TOL = MVT_USE_DOUBLE ? 1e-8 : 2e-3;    /* pixels */
+
+struct OracleCam {
+    cv::Mat K, D, rvec, tvec;
+    Eigen::Matrix<double, 3, 4> P;
+    Eigen::Matrix3d R;
+};
+
+static OracleCam oracle_of(const mvt_camera_params_t &p)
+{
+    OracleCam o;
+    o.K = cv::Mat(3, 3, CV_64F);
+    for (int i = 0; i < 9; i++) o.K.at<double>(i) = p.camera_matrix[i];
+    o.D = cv::Mat(1, 8, CV_64F);
+    for (int i = 0; i < 8; i++) o.D.at<double>(i) = p.dist[i];
+    o.rvec = (cv::Mat_<double>(3, 1) << p.rvec[0], p.rvec[1], p.rvec[2]);
+    o.tvec = (cv::Mat_<double>(3, 1) << p.tvec[0], p.tvec[1], p.tvec[2]);
+    cv::Mat R;
+    cv::Rodrigues(o.rvec, R);
+    Eigen::Matrix<double, 3, 4> Rt;
+    Eigen::Matrix3d Ke;
+    for (int r = 0; r < 3; r++) {
+        for (int c = 0; c < 3; c++) {
+            Rt(r, c) = R.at<double>(r, c);
+            o.R(r, c) = R.at<double>(r, c);
+            Ke(r, c) = o.K.at<double>(r, c);
+        }
+        Rt(r, 3) = o.tvec.at<double>(r);
+    }
+    o.P = Ke * Rt;
+    return o;
+}
+
+static void cv_project(const OracleCam &o, const Eigen::Vector3d &X, Eigen::Vector2d &uv, Eigen::Matrix<double, 2, 3> *J)
+{
+    std::vector<cv::Point3d> pts{cv::Point3d(X(0), X(1), X(2))};
+    std::vector<cv::Point2d> out;
+    cv::Mat jac;
+    cv::projectPoints(pts, o.rvec, o.tvec, o.K, o.D, out, jac);
+    uv << out[0].x, out[0].y;
+    if (J != nullptr) { /* d uv / d X = d uv / d tvec * R */
+        Eigen::Matrix<double, 2, 3> dt;
+        for (int r = 0; r < 2; r++)
+            for (int c = 0; c < 3; c++) dt(r, c) = jac.at<double>(r, 3 + c);
+        *J = dt * o.R;
+    }
+}
+
+static Eigen::Vector2d cv_undistort_ideal(const OracleCam &o, const Eigen::Vector2d &uv)
+{
+    std::vector<cv::Point2d> in{cv::Point2d(uv(0), uv(1))}, out;
+    cv::undistortPoints(in, out, o.K, o.D, cv::noArray(), o.K,
+                        cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 200, 1e-15));
+    return Eigen::Vector2d(out[0].x, out[0].y);
+}
+
+static std::vector<mvt_camera_params_t> random_params(std::mt19937 &g, int n, bool eight)
+{
+    std::uniform_real_distribution<double> U(0, 1);
+    std::vector<mvt_camera_params_t> ps;
+    for (int k = 0; k < n; k++) {
+        const double a = 2 * M_PI * (k + 0.3 * U(g)) / n;
+        const double pos[3] = {3 + 3.2 * std::cos(a), 2.5 + 2.7 * std::sin(a), 2.3 + 0.6 * U(g)};
+        const double tgt[3] = {3 + U(g) - 0.5, 2.5 + U(g) - 0.5, 0.8 + 0.4 * U(g)};
+        const double d[5] = {-0.35 + 0.4 * U(g), 0.1 * U(g), 2e-3 * (U(g) - 0.5), 2e-3 * (U(g) - 0.5), -0.02 * U(g)};
+        mvt_camera_params_t p;
+        test_look_at(&p, pos, tgt, 350 + 400 * U(g), 300 + 150 * U(g), 220 + 120 * U(g), d);
+        p.camera_matrix[4] = (mvt_real)((double)p.camera_matrix[0] * (0.97 + 0.06 * U(g)));
+        if (eight) {
+            p.dist[5] = (mvt_real)(0.05 * U(g));
+            p.dist[6] = (mvt_real)(0.01 * U(g));
+            p.dist[7] = (mvt_real)(0.002 * U(g));
+        }
+        ps.push_back(p);
+    }
+    return ps;
+}
+
+static void test_mvt_cam_project_matches_opencv(void **state)
+{
+    (void)state;
+    std::mt19937 g(7);
+    std::uniform_real_distribution<double> U(0, 1);
+    for (int eight = 0; eight < 2; eight++) {
+        for (const auto &p : random_params(g, 8, eight != 0)) {
+            mvt_camera_t cam;
+            assert_int_equal(mvt_cam_init(&cam, &p), MVT_OK);
+            const OracleCam o = oracle_of(p);
+            for (int i = 0; i < 9; i++) { /* Rodrigues */
+                assert_true(std::fabs((double)cam.R[i] - o.R(i / 3, i % 3)) < (MVT_USE_DOUBLE ? 1e-12 : 1e-6));
+            }
+            for (int t = 0; t < 50; t++) {
+                const Eigen::Vector3d X(0.5 + 5 * U(g), 0.5 + 4 * U(g), 0.2 + 1.8 * U(g));
+                Eigen::Vector2d uv;
+                Eigen::Matrix<double, 2, 3> J;
+                cv_project(o, X, uv, &J);
+                if (uv(0) < 0 || uv(0) > 767 || uv(1) < 0 || uv(1) > 575) continue;
+                const mvt_real x[3] = {(mvt_real)X(0), (mvt_real)X(1), (mvt_real)X(2)};
+                mvt_real m[2], mj[6];
+                assert_int_equal(mvt_cam_project(&cam, x, m, mj), MVT_OK);
+                assert_true(std::fabs(m[0] - uv(0)) < PX_TOL * 10 && std::fabs(m[1] - uv(1)) < PX_TOL * 10);
+                for (int i = 0; i < 6; i++) {
+                    const double ref = J(i / 3, i % 3);
+                    assert_true(std::fabs(mj[i] - ref) < 1e-4 * std::fabs(ref) + (MVT_USE_DOUBLE ? 1e-8 : 1e-2));
+                }
+                /* undistortion (iterative inverse) against OpenCV's, run to convergence */
+                const Eigen::Vector2d ideal = cv_undistort_ideal(o, uv);
+                mvt_real xn[2], mi[2];
+                const mvt_real raw[2] = {(mvt_real)uv(0), (mvt_real)uv(1)};
+                assert_int_equal(mvt_cam_undistort(&cam, raw, xn), MVT_OK);
+                mvt_cam_normalised_to_ideal(&cam, xn, mi);
+                assert_true(std::fabs(mi[0] - ideal(0)) < PX_TOL * 20 && std::fabs(mi[1] - ideal(1)) < PX_TOL * 20);
+            }
+        }
+    }
+}
+
+/* The oracle filter: the paper's 8x8 form in Eigen double. */
+struct OracleFilter {
+    Vec8 s;
+    Mat8 S;
+    void init(const mvt_cv_state_t &c)
+    {
+        s.setZero();
+        S.setZero();
+        for (int i = 0; i < 3; i++) {
+            s(i) = c.x[i];
+            s(4 + i) = c.x[3 + i];
+        }
+        s(3) = 1.0;
+        const int map[6] = {0, 1, 2, 4, 5, 6};
+        for (int i = 0; i < 6; i++)
+            for (int j = 0; j < 6; j++) S(map[i], map[j]) = c.P[i * 6 + j];
+    }
+    void predict(double dt, const double q[3])
+    {
+        Mat8 F = Mat8::Identity();
+        Mat8 Q = Mat8::Zero();
+        for (int i = 0; i < 3; i++) {
+            F(i, 4 + i) = dt; /* Eq. 16 with the frame interval */
+            Q(i, i) = q[i] * dt * dt * dt / 3;
+            Q(i, 4 + i) = Q(4 + i, i) = q[i] * dt * dt / 2;
+            Q(4 + i, 4 + i) = q[i] * dt;
+        }
+        s = F * s;
+        S = F * S * F.transpose() + Q;
+    }
+    /* one camera's pixel rows; lin 0 Jacobian, 1 paper, 2 paper centred */
+    void update(const OracleCam &o, int lin, const Eigen::Vector2d &raw, double r)
+    {
+        Eigen::Matrix<double, 2, 8> H = Eigen::Matrix<double, 2, 8>::Zero();
+        Eigen::Vector2d y;
+        if (lin == 0) {
+            Eigen::Vector2d uv;
+            Eigen::Matrix<double, 2, 3> J;
+            cv_project(o, s.head<3>(), uv, &J);
+            H.block<2, 3>(0, 0) = J;
+            y = raw - uv;
+        } else {
+            const double alpha = 1.0 / (o.P.row(2).dot(s.head<4>())); /* Eq. 18 */
+            Eigen::Matrix<double, 3, 4> Pc = o.P;
+            if (lin == 2) {
+                Pc.row(0) -= o.K.at<double>(0, 2) * o.P.row(2);
+                Pc.row(1) -= o.K.at<double>(1, 2) * o.P.row(2);
+            }
+            H.block<2, 4>(0, 0) = alpha * Pc.topRows<2>();
+            Eigen::Vector2d z = cv_undistort_ideal(o, raw);
+            if (lin == 2) z -= Eigen::Vector2d(o.K.at<double>(0, 2), o.K.at<double>(1, 2));
+            y = z - H * s;
+        }
+        const Eigen::Matrix2d R = r * Eigen::Matrix2d::Identity();
+        const Eigen::Matrix2d Sy = H * S * H.transpose() + R;
+        const Eigen::Matrix<double, 8, 2> K = S * H.transpose() * Sy.inverse();
+        s += K * y;
+        const Mat8 A = Mat8::Identity() - K * H;
+        S = A * S * A.transpose() + K * R * K.transpose();
+    }
+};
+
+static void test_mvt_pkf_update_sequence_matches_eigen_oracle(void **state)
+{
+    (void)state;
+    std::mt19937 g(11);
+    std::normal_distribution<double> N(0, 1);
+    const auto ps = random_params(g, 5, false);
+    std::vector<mvt_camera_t> cams(5);
+    std::vector<OracleCam> oc;
+    for (int k = 0; k < 5; k++) {
+        assert_int_equal(mvt_cam_init(&cams[k], &ps[k]), MVT_OK);
+        oc.push_back(oracle_of(ps[k]));
+    }
+    const double q[3] = {0.6, 0.4, 0.03};
+    const mvt_real qr[3] = {(mvt_real)q[0], (mvt_real)q[1], (mvt_real)q[2]};
+    for (int lin = 0; lin < 3; lin++) {
+        mvt_cv_state_t c;
+        const mvt_real p0[3] = {2.5f, 2.0f, 1.6f}, cov[9] = {0.01f, 0.002f, 0, 0.002f, 0.01f, 0, 0, 0, 0.004f};
+        mvt_cv_init(&c, p0, cov, 0.5f, 0);
+        OracleFilter of;
+        of.init(c);
+        double worst = 0;
+        for (int step = 0; step < 100; step++) {
+            const double dt = 0.04 + 0.002 * std::sin(step); /* cameras are not perfectly periodic */
+            const double t = step * 0.04;
+            const Eigen::Vector3d truth(2.5 + 0.8 * std::sin(0.5 * t), 2.0 + 0.6 * std::cos(0.4 * t), 1.7);
+            assert_int_equal(mvt_cv_predict(&c, (mvt_real)dt, qr), MVT_OK);
+            of.predict(dt, q);
+            for (int k = 0; k < 5; k++) {
+                if (step % 7 == k) continue; /* occluded view: rows left out */
+                Eigen::Vector2d uv;
+                cv_project(oc[k], truth, uv, nullptr);
+                uv += 3.0 * Eigen::Vector2d(N(g), N(g));
+                const mvt_real raw[2] = {(mvt_real)uv(0), (mvt_real)uv(1)};
+                mvt_pkf_meas_t m;
+                mvt_pkf_innov_t in;
+                assert_int_equal(mvt_pkf_meas_make(&cams[k], raw, 3.0f, &m), MVT_OK);
+                assert_int_equal(mvt_pkf_innovation(&c, &cams[k], (mvt_pkf_lin_t)lin, &m, &in), MVT_OK);
+                assert_int_equal(mvt_pkf_update(&c, &in), MVT_OK);
+                /* the oracle sees the same (float-rounded) measurement */
+                of.update(oc[k], lin, Eigen::Vector2d(raw[0], raw[1]), 9.0);
+            }
+            const int map[6] = {0, 1, 2, 4, 5, 6};
+            for (int i = 0; i < 6; i++) {
+                const double d = std::fabs((double)c.x[i] - of.s(map[i]));
+                worst = std::fmax(worst, d);
+                assert_true(d < POS_TOL * (i < 3 ? 1 : 10));
+                for (int j = 0; j < 6; j++) {
+                    const double ref = of.S(map[i], map[j]);
+                    const double scale = std::sqrt(of.S(map[i], map[i]) * of.S(map[j], map[j]));
+                    assert_true(std::fabs((double)c.P[i * 6 + j] - ref) < (MVT_USE_DOUBLE ? 1e-9 : 2e-3) * scale);
+                }
+            }
+            /* the homogeneous entries stay constants in the oracle */
+            assert_true(std::fabs(of.s(3) - 1.0) < 1e-12 && std::fabs(of.s(7)) < 1e-12);
+        }
+        std::printf("# linearisation %d: worst |x - oracle| over 100 steps = %.3g\n", lin, worst);
+    }
+}
+
+static void test_mvt_cv_update_point_matches_eigen_kalman(void **state)
+{
+    (void)state;
+    mvt_cv_state_t c;
+    const mvt_real p0[3] = {1, 2, 1.7f}, cov[9] = {0.02f, 0.001f, 0, 0.001f, 0.03f, 0.002f, 0, 0.002f, 0.01f};
+    mvt_cv_init(&c, p0, cov, 0.3f, 0);
+    const mvt_real q[3] = {0.5f, 0.5f, 0.05f};
+    mvt_cv_predict(&c, 0.04f, q);
+    Eigen::Matrix<double, 6, 6> P;
+    Eigen::Matrix<double, 6, 1> x;
+    for (int i = 0; i < 6; i++) {
+        x(i) = c.x[i];
+        for (int j = 0; j < 6; j++) P(i, j) = c.P[i * 6 + j];
+    }
+    const mvt_real z[3] = {1.05f, 1.97f, 1.72f}, R[9] = {4e-3f, 1e-3f, 0, 1e-3f, 5e-3f, 0, 0, 0, 2e-3f};
+    Eigen::Matrix<double, 3, 6> H = Eigen::Matrix<double, 3, 6>::Zero();
+    H.leftCols<3>().setIdentity();
+    Eigen::Matrix3d Re;
+    Eigen::Vector3d ze;
+    for (int i = 0; i < 3; i++) {
+        ze(i) = z[i];
+        for (int j = 0; j < 3; j++) Re(i, j) = R[i * 3 + j];
+    }
+    const Eigen::Matrix3d S = H * P * H.transpose() + Re;
+    const Eigen::Matrix<double, 6, 3> K = P * H.transpose() * S.inverse();
+    x += K * (ze - H * x);
+    P = (Eigen::Matrix<double, 6, 6>::Identity() - K * H) * P;
+    assert_int_equal(mvt_cv_update_point(&c, z, R, 0, NULL), MVT_OK);
+    for (int i = 0; i < 6; i++) {
+        assert_true(std::fabs(c.x[i] - x(i)) < POS_TOL);
+        for (int j = 0; j < 6; j++) assert_true(std::fabs(c.P[i * 6 + j] - P(i, j)) < (MVT_USE_DOUBLE ? 1e-12 : 1e-6));
+    }
+}
+
+static void test_mvt_pkf_paper_distance_matches_projected_ellipsoid(void **state)
+{
+    (void)state;
+    std::mt19937 g(3);
+    std::uniform_real_distribution<double> U(-1, 1);
+    const auto ps = random_params(g, 4, false);
+    for (const auto &p : ps) {
+        mvt_camera_t cam;
+        assert_int_equal(mvt_cam_init(&cam, &p), MVT_OK);
+        const OracleCam o = oracle_of(p);
+        mvt_cv_state_t c;
+        const mvt_real p0[3] = {2.8f, 2.4f, 1.5f}, cov[9] = {1e-2f, 0, 0, 0, 1e-2f, 0, 0, 0, 1e-2f};
+        mvt_cv_init(&c, p0, cov, 0.3f, 0);
+        const mvt_real var[3] = {0.01f, 0.02f, 0.005f};
+        const double gamma = 6.0;
+        /* Eigen: outline conic of the ellipsoid's dual quadric */
+        Eigen::Matrix4d Qd = Eigen::Matrix4d::Zero();
+        Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
+        for (int i = 0; i < 3; i++) {
+            Qd(i, i) = gamma * var[i];
+            T(i, 3) = p0[i];
+        }
+        Qd(3, 3) = -1;
+        const Eigen::Matrix3d C = (o.P * T * Qd * T.transpose() * o.P.transpose()).inverse();
+        const Eigen::Matrix2d A = C.topLeftCorner<2, 2>();
+        const Eigen::Vector2d b = C.topRightCorner<2, 1>();
+        const Eigen::Vector2d x0 = -A.inverse() * b;
+        const double k = x0.dot(A * x0) - C(2, 2);
+        double maxd = 0;
+        for (int t = 0; t < 400; t++) {
+            /* a point on the ellipsoid surface, projected (pinhole) */
+            Eigen::Vector3d u(U(g), U(g), U(g));
+            u.normalize();
+            Eigen::Vector4d X(p0[0] + std::sqrt(gamma * var[0]) * u(0), p0[1] + std::sqrt(gamma * var[1]) * u(1),
+                              p0[2] + std::sqrt(gamma * var[2]) * u(2), 1);
+            const Eigen::Vector3d xh = o.P * X;
+            const Eigen::Vector2d z(xh(0) / xh(2), xh(1) / xh(2));
+            mvt_pkf_meas_t m;
+            m.ideal[0] = (mvt_real)z(0);
+            m.ideal[1] = (mvt_real)z(1);
+            mvt_real dist;
+            assert_int_equal(mvt_pkf_paper_distance(&c, &cam, var, (mvt_real)gamma, &m, &dist), MVT_OK);
+            const Eigen::Vector2d d = z - x0;
+            const double ref = std::sqrt(d.dot(A * d) / k);
+            assert_true(std::fabs(dist - ref) < (MVT_USE_DOUBLE ? 1e-9 : 2e-3));
+            maxd = std::fmax(maxd, ref);
+        }
+        /* the outline contains every projected surface point and touches some */
+        assert_true(maxd <= 1.0 + 1e-3 && maxd > 0.9);
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_mvt_cam_project_matches_opencv),
+        cmocka_unit_test(test_mvt_pkf_update_sequence_matches_eigen_oracle),
+        cmocka_unit_test(test_mvt_cv_update_point_matches_eigen_kalman),
+        cmocka_unit_test(test_mvt_pkf_paper_distance_matches_projected_ellipsoid),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

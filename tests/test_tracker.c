@@ -1,0 +1,252 @@
+/* Unit tests of mvt_cv, mvt_pkf and mvt_tracker: filter behaviour and the track lifecycle. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include "mvt_tracker.h"
+#include "test_support.h"
+
+static mvt_tracker_t g_tracker; /* large: static */
+static mvt_frame_t g_frame;
+static mvt_output_t g_out;
+
+static uint32_t g_seen; /* cameras whose image contains the point */
+
+static void frame_of(const mvt_camera_t *cams, int n, const mvt_real x[3], int64_t utime, test_rng_t *rng, double sd)
+{
+    g_seen = 0;
+    memset(&g_frame, 0, sizeof(g_frame));
+    g_frame.utime_us = utime;
+    for (int k = 0; k < n; k++) {
+        mvt_view_t *v = &g_frame.views[k];
+        v->observed = 1;
+        v->utime_us = utime;
+        mvt_real uv[2];
+        if (mvt_cam_project(&cams[k], x, uv, NULL) != MVT_OK || uv[0] < 0 || uv[1] < 0 || uv[0] > 767 || uv[1] > 575) continue;
+        g_seen |= 1u << k;
+        v->det[0].u = uv[0] + (mvt_real)(sd * test_normal(rng));
+        v->det[0].v = uv[1] + (mvt_real)(sd * test_normal(rng));
+        v->det[0].sigma_px = (mvt_real)sd;
+        v->num_detections = 1;
+    }
+}
+
+static void init_tracker(mvt_camera_t cams[5], mvt_filter_t f, mvt_pkf_lin_t lin)
+{
+    assert_int_equal(test_room_cameras(cams, 1), 0);
+    mvt_tracker_config_t cfg;
+    mvt_tracker_config_default(&cfg);
+    cfg.filter = f;
+    cfg.lin = lin;
+    cfg.volume_min[0] = 0; cfg.volume_min[1] = 0; cfg.volume_min[2] = 0;
+    cfg.volume_max[0] = 6; cfg.volume_max[1] = 5; cfg.volume_max[2] = 2.5f;
+    assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 5), MVT_OK);
+}
+
+static void test_mvt_cv_predict_constant_velocity_moves_and_grows(void **state)
+{
+    (void)state;
+    mvt_cv_state_t s;
+    const mvt_real p[3] = {1, 2, 1.7f}, cov[9] = {1e-4f, 0, 0, 0, 1e-4f, 0, 0, 0, 1e-4f}, q[3] = {0.5f, 0.5f, 0.05f};
+    mvt_cv_init(&s, p, cov, 0.25f, 0);
+    s.x[3] = 1.0f;
+    s.x[4] = -0.5f;
+    assert_int_equal(mvt_cv_predict(&s, 0.04f, q), MVT_OK);
+    assert_float_equal(s.x[0], 1.04, 1e-6);
+    assert_float_equal(s.x[1], 1.98, 1e-6);
+    /* Pxx = 1e-4 + dt^2 * 0.25 + q dt^3 / 3 */
+    assert_float_equal(s.P[0], 1e-4 + 0.0016 * 0.25 + 0.5 * 0.04 * 0.04 * 0.04 / 3, 1e-8);
+    assert_float_equal(s.P[3], 0.04 * 0.25 + 0.5 * 0.0016 / 2, 1e-7);
+    assert_int_equal(mvt_cv_predict(&s, -1.0f, q), MVT_ERR_INVALID);
+    assert_int_equal(mvt_cv_predict(&s, NAN, q), MVT_ERR_INVALID);
+}
+
+static void test_mvt_cv_update_point_outlier_gated_state_unchanged(void **state)
+{
+    (void)state;
+    mvt_cv_state_t s;
+    const mvt_real p[3] = {1, 2, 1.7f}, cov[9] = {1e-2f, 0, 0, 0, 1e-2f, 0, 0, 0, 1e-2f};
+    mvt_cv_init(&s, p, cov, 0.25f, 0);
+    const mvt_cv_state_t before = s;
+    const mvt_real z[3] = {3, 2, 1.7f}, R[9] = {1e-2f, 0, 0, 0, 1e-2f, 0, 0, 0, 1e-2f};
+    mvt_real d2;
+    assert_int_equal(mvt_cv_update_point(&s, z, R, 16.0f, &d2), MVT_ERR_GATED);
+    assert_float_equal(d2, 4.0 / 0.02, 1e-2);
+    assert_memory_equal(&s, &before, sizeof(s));
+    const mvt_real zn[3] = {NAN, 0, 0};
+    assert_int_equal(mvt_cv_update_point(&s, zn, R, 0, NULL), MVT_ERR_NONFINITE);
+    /* an accepted update lands halfway between equal-variance prior and measurement */
+    const mvt_real z2[3] = {1.2f, 2, 1.7f};
+    assert_int_equal(mvt_cv_update_point(&s, z2, R, 16.0f, NULL), MVT_OK);
+    assert_float_equal(s.x[0], 1.1, 1e-5);
+    assert_float_equal(s.P[0], 5e-3, 1e-6);
+}
+
+static void test_mvt_pkf_innovation_behind_camera_refused(void **state)
+{
+    (void)state;
+    mvt_camera_t cams[5];
+    assert_int_equal(test_room_cameras(cams, 0), 0);
+    mvt_cv_state_t s;
+    const mvt_real p[3] = {3, 2.5f, 4.0f}, cov[9] = {1e-2f, 0, 0, 0, 1e-2f, 0, 0, 0, 1e-2f}; /* above the ceiling camera */
+    mvt_cv_init(&s, p, cov, 0.25f, 0);
+    mvt_pkf_meas_t m;
+    const mvt_real uv[2] = {380, 290};
+    assert_int_equal(mvt_pkf_meas_make(&cams[4], uv, 2, &m), MVT_OK);
+    mvt_pkf_innov_t in;
+    for (int lin = 0; lin < 3; lin++) {
+        assert_int_equal(mvt_pkf_innovation(&s, &cams[4], (mvt_pkf_lin_t)lin, &m, &in), MVT_ERR_BEHIND);
+    }
+}
+
+/* A person walking a straight line at 0.4 m/s is acquired, confirmed and tracked within 3 cm. */
+static void run_straight_walk(mvt_filter_t f, mvt_pkf_lin_t lin, double tol_m)
+{
+    mvt_camera_t cams[5];
+    init_tracker(cams, f, lin);
+    test_rng_t rng = {777};
+    double se = 0;
+    int n = 0;
+    int32_t id = -1;
+    int seen_total = 0, used_total = 0;
+    double vsum[2] = {0, 0};
+    for (int t = 0; t < 250; t++) {
+        const double ts = t * 0.04;
+        const mvt_real x[3] = {(mvt_real)(1.0 + 0.35 * ts), (mvt_real)(1.0 + 0.2 * ts), 1.7f};
+        frame_of(cams, 5, x, 1000000 + t * 40000, &rng, 3.0);
+        assert_int_equal(mvt_tracker_step(&g_tracker, &g_frame, &g_out), MVT_OK);
+        assert_int_equal(g_out.num_tracks, 1);
+        if (t >= 2) assert_int_equal(g_out.tracks[0].status, MVT_TRACK_CONFIRMED);
+        if (id < 0) id = g_out.tracks[0].id;
+        assert_int_equal(g_out.tracks[0].id, id);
+        /* only cameras that see the person; the chi-square gate (13.8) may reject 0.1 % of true ones */
+        assert_int_equal(g_out.tracks[0].cameras_used & ~g_seen, 0);
+        for (int k = 0; k < 5; k++) {
+            seen_total += (g_seen >> k) & 1u;
+            used_total += (g_out.tracks[0].cameras_used >> k) & 1u;
+        }
+        if (t >= 50) {
+            for (int i = 0; i < 3; i++) se += (double)((g_out.tracks[0].pos_m[i] - x[i]) * (g_out.tracks[0].pos_m[i] - x[i]));
+            vsum[0] += (double)g_out.tracks[0].vel_ms[0];
+            vsum[1] += (double)g_out.tracks[0].vel_ms[1];
+            n++;
+        }
+    }
+    assert_true(sqrt(se / n) < tol_m);
+    assert_true(used_total >= seen_total - 4);
+    assert_float_equal(vsum[0] / n, 0.35, 0.03);
+    assert_float_equal(vsum[1] / n, 0.2, 0.03);
+}
+
+static void test_mvt_tracker_step_straight_walk_pkf_tracked(void **state)
+{
+    (void)state;
+    run_straight_walk(MVT_FILTER_PROJECTIVE, MVT_PKF_JACOBIAN, 0.03);
+}
+
+static void test_mvt_tracker_step_straight_walk_kf_tracked(void **state)
+{
+    (void)state;
+    run_straight_walk(MVT_FILTER_TRIANGULATE, MVT_PKF_JACOBIAN, 0.03);
+}
+
+static void test_mvt_tracker_step_unseen_track_coasts_then_dies(void **state)
+{
+    (void)state;
+    mvt_camera_t cams[5];
+    init_tracker(cams, MVT_FILTER_PROJECTIVE, MVT_PKF_JACOBIAN);
+    test_rng_t rng = {1};
+    const mvt_real x[3] = {2, 2, 1.7f};
+    int64_t t = 0;
+    for (int i = 0; i < 10; i++, t += 40000) {
+        frame_of(cams, 5, x, t, &rng, 1.0);
+        mvt_tracker_step(&g_tracker, &g_frame, &g_out);
+    }
+    const int32_t id = g_out.tracks[0].id;
+    int coasting = 0;
+    for (int i = 0; i < 40; i++, t += 40000) { /* cameras report, but see nothing */
+        memset(&g_frame, 0, sizeof(g_frame));
+        g_frame.utime_us = t;
+        for (int k = 0; k < 5; k++) { g_frame.views[k].observed = 1; g_frame.views[k].utime_us = t; }
+        mvt_tracker_step(&g_tracker, &g_frame, &g_out);
+        if (g_out.num_tracks == 1) {
+            assert_int_equal(g_out.tracks[0].status, MVT_TRACK_COASTING);
+            assert_int_equal(g_out.tracks[0].cameras_used, 0);
+            coasting++;
+        }
+    }
+    assert_int_equal(g_out.num_tracks, 0);
+    assert_true(coasting >= 24 && coasting <= 26); /* coast_max_s = 1 s at 25 fps */
+    /* re-acquired as a new identity: ids are never reused */
+    for (int i = 0; i < 3; i++, t += 40000) {
+        frame_of(cams, 5, x, t, &rng, 1.0);
+        mvt_tracker_step(&g_tracker, &g_frame, &g_out);
+    }
+    assert_int_equal(g_out.num_tracks, 1);
+    assert_true(g_out.tracks[0].id > id);
+}
+
+static void test_mvt_tracker_step_hostile_detections_counted_not_fatal(void **state)
+{
+    (void)state;
+    mvt_camera_t cams[5];
+    init_tracker(cams, MVT_FILTER_PROJECTIVE, MVT_PKF_JACOBIAN);
+    memset(&g_frame, 0, sizeof(g_frame));
+    g_frame.utime_us = 1000;
+    for (int k = 0; k < 5; k++) {
+        g_frame.views[k].observed = 1;
+        g_frame.views[k].utime_us = 1000;
+        g_frame.views[k].num_detections = 5000; /* over capacity: clamped */
+        for (int d = 0; d < MVT_MAX_DETECTIONS; d++) {
+            g_frame.views[k].det[d].u = d % 3 == 0 ? NAN : (mvt_real)(d * 7 % 768);
+            g_frame.views[k].det[d].v = d % 5 == 0 ? INFINITY : (mvt_real)(d * 13 % 576);
+            g_frame.views[k].det[d].sigma_px = d % 7 == 0 ? -1.0f : 2.0f;
+        }
+    }
+    g_frame.views[MVT_MAX_CAMERAS - 1].observed = 1; /* a view beyond the rig */
+    assert_int_equal(mvt_tracker_step(&g_tracker, &g_frame, &g_out), MVT_OK);
+    assert_true(g_tracker.counters.detections_over_capacity == 5ull * (5000 - MVT_MAX_DETECTIONS));
+    assert_true(g_tracker.counters.detections_nonfinite > 0);
+    assert_true(g_tracker.counters.views_unknown_camera == 1);
+    assert_true(g_out.num_tracks <= MVT_MAX_TARGETS);
+    /* time going backwards: refused and counted */
+    g_frame.utime_us = 500;
+    assert_int_equal(mvt_tracker_step(&g_tracker, &g_frame, &g_out), MVT_ERR_INVALID);
+    assert_true(g_tracker.counters.frames_time_backwards == 1);
+}
+
+static void test_mvt_tracker_init_bad_config_rejected(void **state)
+{
+    (void)state;
+    mvt_camera_t cams[5];
+    assert_int_equal(test_room_cameras(cams, 0), 0);
+    mvt_tracker_config_t cfg;
+    mvt_tracker_config_default(&cfg);
+    assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 0), MVT_ERR_INVALID);
+    assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, MVT_MAX_CAMERAS + 1), MVT_ERR_INVALID);
+    cfg.q_m2s3[1] = -1;
+    assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 5), MVT_ERR_INVALID);
+    mvt_tracker_config_default(&cfg);
+    cfg.confirm_hits = 9;
+    assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 5), MVT_ERR_INVALID);
+    mvt_tracker_config_default(&cfg);
+    cfg.volume_max[2] = cfg.volume_min[2];
+    assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 5), MVT_ERR_INVALID);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_mvt_cv_predict_constant_velocity_moves_and_grows),
+        cmocka_unit_test(test_mvt_cv_update_point_outlier_gated_state_unchanged),
+        cmocka_unit_test(test_mvt_pkf_innovation_behind_camera_refused),
+        cmocka_unit_test(test_mvt_tracker_step_straight_walk_pkf_tracked),
+        cmocka_unit_test(test_mvt_tracker_step_straight_walk_kf_tracked),
+        cmocka_unit_test(test_mvt_tracker_step_unseen_track_coasts_then_dies),
+        cmocka_unit_test(test_mvt_tracker_step_hostile_detections_counted_not_fatal),
+        cmocka_unit_test(test_mvt_tracker_init_bad_config_rejected),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
