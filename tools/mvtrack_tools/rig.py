@@ -170,7 +170,7 @@ def random_rig(rng: np.random.Generator, n_cameras: int, room=(7.0, 6.0, 3.0), w
     for k in range(n_cameras):
         a = 2 * np.pi * (k + rng.uniform(-0.3, 0.3)) / n_cameras
         pos = np.array([L / 2 + 0.5 * L * np.cos(a) * 0.95, W / 2 + 0.5 * W * np.sin(a) * 0.95, H - rng.uniform(0.05, 0.6)])
-        tgt = np.array([L / 2 + rng.uniform(-0.7, 0.7), W / 2 + rng.uniform(-0.7, 0.7), rng.uniform(0.6, 1.2)])
+        tgt = np.array([L / 2 + rng.uniform(-0.7, 0.7), W / 2 + rng.uniform(-0.7, 0.7), rng.uniform(1.0, 1.4)])
         w = width or int(rng.choice([640, 768, 1024, 1280]))
         h = height or int(w * rng.choice([0.75, 0.5625]))
         f = rng.uniform(0.45, 0.8) * w

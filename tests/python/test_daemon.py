@@ -1,0 +1,202 @@
+"""mvtrackd on recorded logs and live LCM: accuracy, determinism, generality, hostile input, CLI."""
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import time
+from pathlib import Path
+
+import lcm
+import numpy as np
+import pytest
+
+from mvtrack_tools.evaluate import evaluate_single
+from mvtrack_tools.lcmio import LogWriter, camera_frame, ground_truth, mt, read_log
+from mvtrack_tools.rig import random_rig, smartroom
+from mvtrack_tools.scenes import WalkModel, head_detections
+from mvtrack_tools.simulate import T0_UTIME, experiment1, write_scene
+
+pytestmark = pytest.mark.daemon
+
+
+def run(daemon: Path, rig: Path, scene: Path, out: Path, *args: str, check: bool = True) -> subprocess.CompletedProcess:
+    r = subprocess.run([str(daemon), "--rig", str(rig), "--in", f"file://{scene}?speed=0", "--out",
+                        f"file://{out}?mode=w", *args], capture_output=True, text=True, timeout=300)
+    if check:
+        assert r.returncode == 0, r.stderr
+    return r
+
+
+def make_exp1(tmp_path: Path, var: float, occ: bool, seconds: float, seed: int):
+    rig = smartroom()
+    rp = tmp_path / "rig.yaml"
+    rig.write(rp)
+    _, states, dets = experiment1(rig, seconds, var, occ, seed)
+    sp = tmp_path / f"scene_{seed}.lcm"
+    w = LogWriter(str(sp))
+    write_scene(w, rig, states, dets, var, progress=False, frame_order_seed=seed)
+    w.close()
+    return rig, rp, sp
+
+
+def test_daemon_exp1_default_filter_near_pcrlb_and_beats_baseline(tmp_path, daemon_path):
+    rig, rp, sp = make_exp1(tmp_path, 100.0, False, 40.0, seed=21)
+    res = {}
+    for mode in ("pkf", "kf"):
+        out = tmp_path / f"{mode}.lcm"
+        run(daemon_path, rp, sp, out, "--mode", mode, "--q", "0.75,0.5,0.022")
+        res[mode] = evaluate_single(str(sp), str(out), rig, 100.0)
+    assert res["pkf"].matched >= res["pkf"].frames - 5
+    assert res["pkf"].ratio < 1.15, res["pkf"]
+    assert res["pkf"].rmse_mm < res["kf"].rmse_mm
+
+
+def test_daemon_exp1_with_occlusions_keeps_the_track(tmp_path, daemon_path):
+    rig, rp, sp = make_exp1(tmp_path, 100.0, True, 40.0, seed=22)
+    out = tmp_path / "pkf.lcm"
+    run(daemon_path, rp, sp, out)
+    r = evaluate_single(str(sp), str(out), rig, None)
+    assert r.matched >= 0.98 * r.frames
+    assert r.mean_mm < 120
+
+
+def tracks_without_publish_time(path: Path) -> list[bytes]:
+    out = []
+    for ev in lcm.EventLog(str(path), "r"):
+        if ev.channel == "TRACKS":
+            m = mt.tracks_t.decode(ev.data)
+            m.publish_utime = 0
+            out.append(m.encode())
+    return out
+
+
+def test_daemon_same_log_gives_bit_identical_tracks(tmp_path, daemon_path):
+    _, rp, sp = make_exp1(tmp_path, 200.0, True, 10.0, seed=5)
+    a, b = tmp_path / "a.lcm", tmp_path / "b.lcm"
+    run(daemon_path, rp, sp, a)
+    run(daemon_path, rp, sp, b)
+    ta, tb = tracks_without_publish_time(a), tracks_without_publish_time(b)
+    assert len(ta) == 250
+    assert ta == tb
+
+
+@pytest.mark.parametrize("n_cameras,seed", [(4, 1), (6, 2), (8, 3), (5, 4)])
+def test_daemon_tracks_on_rigs_built_differently(tmp_path, daemon_path, n_cameras, seed):
+    """Random rooms, camera placements, focal lengths, principal points, image sizes, roll and
+    distortion of either sign: nothing of the simulator's SmartRoom."""
+    rng = np.random.default_rng(100 + seed)
+    rig = random_rig(rng, n_cameras)
+    rp = tmp_path / "rig.yaml"
+    rig.write(rp)
+    model = WalkModel.for_room(rig.volume_min, rig.volume_max)
+    states = model.sample(rng, 500, 0.04, rig.volume_min, rig.volume_max, margin=0.8)
+    dets = head_detections(rig, states[:, :3], 4.0, rng)
+    sp = tmp_path / "scene.lcm"
+    w = LogWriter(str(sp))
+    write_scene(w, rig, states, dets, 4.0, progress=False)
+    w.close()
+    out = tmp_path / "tracks.lcm"
+    run(daemon_path, rp, sp, out)
+    r = evaluate_single(str(sp), str(out), rig, None)
+    assert r.matched >= 0.97 * r.frames, r
+    assert r.rmse_mm < 40, r
+
+
+def test_daemon_hostile_input_counted_and_survived(tmp_path, daemon_path):
+    rig = smartroom()
+    rp = tmp_path / "rig.yaml"
+    rig.write(rp)
+    _, states, dets = experiment1(rig, 4.0, 50.0, False, 3)
+    sp = tmp_path / "scene.lcm"
+    w = LogWriter(str(sp))
+    write_scene(w, rig, states, dets, 50.0, progress=False)
+    # hostile messages in the middle of the log
+    u = T0_UTIME + 50 * 40000
+    w.log.write_event(u, "DETECTIONS_cam0", b"\x00\x01garbage")                      # undecodable
+    w.log.write_event(u, "DETECTIONS_cam0", os.urandom(300))                         # undecodable
+    bad = camera_frame(u, 50, rig.cameras[0], [(100.0, 100.0)], 2.0)
+    bad.camera = "nosuchcam"
+    w.write(u, "DETECTIONS_nosuchcam", bad)                                          # unknown camera
+    nan = camera_frame(u + 40000 * 3, 53, rig.cameras[1], [(float("nan"), 5.0), (float("inf"), 1.0)], 2.0)
+    w.write(u, "DETECTIONS_cam1", nan)                                               # NaN / Inf detections
+    wrong = camera_frame(u + 40000 * 4, 54, rig.cameras[2], [(10.0, 10.0)], 2.0)
+    wrong.width = 640
+    w.write(u, "DETECTIONS_cam2", wrong)                                             # size mismatch
+    flood = camera_frame(u + 40000 * 6, 56, rig.cameras[3], [(float(i % 700), float(i % 500)) for i in range(3000)], 2.0)
+    w.write(u, "DETECTIONS_cam3", flood)                                             # over capacity
+    old = camera_frame(T0_UTIME, 0, rig.cameras[4], [(300.0, 300.0)], 2.0)
+    w.write(u, "DETECTIONS_cam4", old)                                               # time going backwards
+    w.close()
+    out = tmp_path / "tracks.lcm"
+    r = run(daemon_path, rp, sp, out)
+    log = read_log(str(out))
+    assert len(log.tracks) >= 99  # every frame set still processed
+    st = log.status[-1]
+    assert st.rejected_undecodable == 2
+    assert st.rejected_unknown_camera == 1
+    assert st.rejected_bad_value >= 3
+    assert st.rejected_over_capacity > 0
+    assert st.rejected_time_backwards + st.rejected_late >= 1
+    assert "undecodable" in r.stderr
+    # the person is still tracked at the end
+    last = log.tracks[max(log.tracks)]
+    assert any(t.status == 2 for t in last)
+
+
+def test_daemon_help_and_bad_arguments(tmp_path, daemon_path):
+    h = subprocess.run([str(daemon_path), "--help"], capture_output=True, text=True)
+    assert h.returncode == 0
+    for word in ("--rig", "--in", "--out", "--mode", "pkf", "kf", "pkf-paper", "ttl=0"):
+        assert word in h.stdout
+    r = subprocess.run([str(daemon_path)], capture_output=True, text=True)
+    assert r.returncode == 2 and "--rig is required" in r.stderr
+    r = subprocess.run([str(daemon_path), "--rig", str(tmp_path / "none.yaml")], capture_output=True, text=True)
+    assert r.returncode == 2 and "cannot open" in r.stderr
+    broken = tmp_path / "broken.yaml"
+    smartroom().write(broken)
+    broken.write_text(broken.read_text().replace("camera_matrix", "camera_matrx", 1))
+    r = subprocess.run([str(daemon_path), "--rig", str(broken)], capture_output=True, text=True)
+    assert r.returncode == 2 and "missing camera_matrix" in r.stderr
+    good = tmp_path / "good.yaml"
+    smartroom().write(good)
+    r = subprocess.run([str(daemon_path), "--rig", str(good), "--mode", "nope"], capture_output=True, text=True)
+    assert r.returncode == 2 and "unknown --mode" in r.stderr
+
+
+def test_daemon_live_udpm_tracks_and_stops_on_sigterm(tmp_path, daemon_path):
+    """Live over LCM multicast (ttl=0, a private port): publish 3 s at 25 fps, then SIGTERM."""
+    port = 7700 + os.getpid() % 200
+    url = f"udpm://239.255.76.67:{port}?ttl=0"
+    rig = smartroom()
+    rp = tmp_path / "rig.yaml"
+    rig.write(rp)
+    _, states, dets = experiment1(rig, 3.0, 50.0, False, 8)
+    p = subprocess.Popen([str(daemon_path), "--rig", str(rp), "--in", url], stderr=subprocess.PIPE, text=True)
+    lc = lcm.LCM(url)
+    got = []
+    lc.subscribe("TRACKS", lambda c, d: got.append(mt.tracks_t.decode(d)))
+    try:
+        time.sleep(0.5)
+        t0 = time.monotonic()
+        for f in range(len(states)):
+            u = T0_UTIME + f * 40000
+            for k, cam in enumerate(rig.cameras):
+                lc.publish(f"DETECTIONS_{cam.name}",
+                           camera_frame(u, f, cam, [(a, b) for a, b, _ in dets[f][k]], 7.0).encode())
+            while lc.handle_timeout(0) > 0:
+                pass
+            delay = t0 + (f + 1) * 0.04 - time.monotonic()
+            if delay > 0:
+                time.sleep(delay)
+        end = time.monotonic() + 1.0
+        while time.monotonic() < end:
+            lc.handle_timeout(50)
+    finally:
+        p.send_signal(signal.SIGTERM)
+        _, err = p.communicate(timeout=10)
+    assert p.returncode == 0, err
+    assert len(got) >= 0.95 * len(states)
+    final = got[-1]
+    assert any(t.status == 2 for t in final.tracks)
+    assert all(m.publish_utime > 0 for m in got)

@@ -1,0 +1,128 @@
+"""Tests of the Python tools against independent references (OpenCV, FilterPy, numpy)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from filterpy.kalman import KalmanFilter
+
+from mvtrack_tools.evaluate import learn_q, pcrlb_position_mse
+from mvtrack_tools.paths import import_types
+from mvtrack_tools.rig import Rig, random_rig, smartroom
+from mvtrack_tools.scenes import AxisModel, Occlusions, WalkModel
+
+
+def test_rig_write_read_round_trip_is_contract_yaml(tmp_path):
+    rig = smartroom()
+    p = tmp_path / "rig.yaml"
+    rig.write(p)
+    text = p.read_text()
+    assert text.startswith("%YAML:1.0")
+    for key in ("cameras:", "camera_matrix: !!opencv-matrix", "distortion_coefficients", "rvec", "tvec",
+                "volume_min", "volume_max", "frame_rate", "image_width", "image_height"):
+        assert key in text
+    back = Rig.read(p)
+    assert [c.name for c in back.cameras] == [c.name for c in rig.cameras]
+    X = np.array([[2.0, 3.0, 1.7], [4.5, 1.0, 1.2]])
+    for a, b in zip(rig.cameras, back.cameras):
+        np.testing.assert_allclose(a.project(X), b.project(X), atol=1e-9)
+    np.testing.assert_allclose(back.volume_max, rig.volume_max)
+
+
+def test_camera_project_jacobian_matches_finite_differences():
+    cam = smartroom().cameras[1]
+    X = np.array([2.5, 2.2, 1.6])
+    J = cam.project_jacobian(X)
+    h = 1e-6
+    for c in range(3):
+        d = np.zeros(3)
+        d[c] = h
+        fd = (cam.project(X + d) - cam.project(X - d))[0] / (2 * h)
+        np.testing.assert_allclose(J[:, c], fd, rtol=1e-5, atol=1e-3)
+
+
+CONTRACT_FIELDS = {
+    "detection_t": ["u", "v", "sigma_px", "bbox", "score", "hue", "saturation"],
+    "camera_frame_t": ["utime", "frame", "camera", "width", "height", "num_detections", "detections", "mask_width",
+                       "mask_height", "num_runs", "runs", "num_hs", "hue", "saturation"],
+    "track_t": ["id", "status", "position", "velocity", "position_covariance", "cameras_used", "extent_min",
+                "extent_max", "hue", "saturation"],
+    "tracks_t": ["utime", "frame", "publish_utime", "num_tracks", "tracks"],
+    "ground_truth_t": ["utime", "frame", "num_targets", "id", "position"],
+}
+
+
+@pytest.mark.parametrize("name", sorted(CONTRACT_FIELDS))
+def test_lcm_types_fields_in_contract_order(name):
+    mt = import_types()
+    cls = getattr(mt, name)
+    assert list(cls.__slots__) == CONTRACT_FIELDS[name]
+
+
+def test_lcm_track_status_constants_match_contract():
+    mt = import_types()
+    assert (mt.track_t.TENTATIVE, mt.track_t.CONFIRMED, mt.track_t.COASTING) == (1, 2, 3)
+
+
+def test_walk_model_discretisation_keeps_stationary_covariance():
+    ax = AxisModel(0.6, 0.6, 0.3, 2.0)
+    F, Q = ax.discrete(0.04)
+    P = ax.stationary_cov()
+    # the continuous stationary covariance is a fixed point of the exact discretisation
+    np.testing.assert_allclose(F @ P @ F.T + Q, P, rtol=1e-9, atol=1e-12)
+
+
+def test_learn_q_recovers_white_acceleration_density():
+    rng = np.random.default_rng(0)
+    q, dt, n = 0.7, 0.04, 20000
+    F = np.array([[1, dt], [0, 1]])
+    Q = q * np.array([[dt ** 3 / 3, dt ** 2 / 2], [dt ** 2 / 2, dt]])
+    L = np.linalg.cholesky(Q)
+    s = np.zeros((n, 2))
+    for k in range(1, n):
+        s[k] = F @ s[k - 1] + L @ rng.standard_normal(2)
+    pos = np.stack([s[:, 0], s[:, 0], s[:, 0]], axis=1)
+    est = learn_q(pos, dt)
+    assert abs(est[0] - q) / q < 0.05
+
+
+def test_pcrlb_equals_filterpy_kalman_covariance_on_linearised_model():
+    """For a linear-Gaussian model the PCRLB recursion is the Kalman covariance recursion."""
+    rig = smartroom()
+    model = WalkModel.for_room(rig.volume_min, rig.volume_max)
+    rng = np.random.default_rng(3)
+    states = model.sample(rng, 60, 0.04, rig.volume_min, rig.volume_max)
+    pos = states[:, :3]
+    var = 50.0
+    bound = pcrlb_position_mse(rig, model, pos, var)
+    F, Q, _ = model.transition(0.04)
+    kf = KalmanFilter(dim_x=6, dim_z=2)
+    kf.F, kf.Q, kf.P = F, Q, model.stationary_cov()
+    for f in range(len(pos)):
+        if f > 0:
+            kf.predict()
+        for cam in rig.cameras:
+            uv = cam.project(pos[f])
+            if cam.depth(pos[f])[0] > 0.2 and cam.in_image(uv)[0]:
+                H = np.zeros((2, 6))
+                H[:, :3] = cam.project_jacobian(pos[f])
+                kf.update(uv[0], R=var * np.eye(2), H=H)
+        assert np.trace(kf.P[:3, :3]) == pytest.approx(bound[f], rel=1e-6)
+
+
+def test_occlusions_cover_requested_fraction_in_bursts():
+    occ, off = Occlusions().masks(np.random.default_rng(5), 200000, 2)
+    assert abs(occ.mean() - 0.3) < 0.02
+    starts = np.flatnonzero(np.diff(occ[:, 0].astype(int)) == 1)
+    assert len(starts) > 100
+    amp = np.linalg.norm(off[occ], axis=1)
+    assert amp.min() >= 40 and amp.max() <= 150
+
+
+def test_random_rig_sees_room_centre_from_every_camera():
+    rng = np.random.default_rng(9)
+    for n in (4, 6, 8):
+        rig = random_rig(rng, n)
+        centre = (rig.volume_min + rig.volume_max) / 2
+        centre[2] = 1.7
+        for cam in rig.cameras:
+            assert cam.in_image(cam.project(centre))[0]
