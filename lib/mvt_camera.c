@@ -31,6 +31,7 @@ mvt_err_t mvt_cam_init(mvt_camera_t *cam, const mvt_camera_params_t *p)
         cam->dist[i] = p->dist[i];
         if (MVT_FABS(p->dist[i]) > MVT_R(0.0)) {
             cam->has_dist = 1;
+            cam->has_rational |= i >= 5;
         }
     }
     mvt_la_rodrigues(p->rvec, cam->R);
@@ -74,15 +75,18 @@ void mvt_cam_distort(const mvt_camera_t *cam, const mvt_real xn[2], mvt_real xd[
     const mvt_real x = xn[0], y = xn[1];
     const mvt_real r2 = x * x + y * y;
     const mvt_real a = MVT_R(1.0) + r2 * (d[0] + r2 * (d[1] + r2 * d[4]));
-    const mvt_real b = MVT_R(1.0) + r2 * (d[5] + r2 * (d[6] + r2 * d[7]));
-    const mvt_real radial = a / b;
+    const mvt_real b = cam->has_rational ? MVT_R(1.0) + r2 * (d[5] + r2 * (d[6] + r2 * d[7])) : MVT_R(1.0);
+    const mvt_real radial = cam->has_rational ? a / b : a;
     const mvt_real p1 = d[2], p2 = d[3];
     xd[0] = x * radial + MVT_R(2.0) * p1 * x * y + p2 * (r2 + MVT_R(2.0) * x * x);
     xd[1] = y * radial + p1 * (r2 + MVT_R(2.0) * y * y) + MVT_R(2.0) * p2 * x * y;
     if (jac != NULL) {
         const mvt_real da = d[0] + r2 * (MVT_R(2.0) * d[1] + MVT_R(3.0) * r2 * d[4]);
-        const mvt_real db = d[5] + r2 * (MVT_R(2.0) * d[6] + MVT_R(3.0) * r2 * d[7]);
-        const mvt_real drad = (da * b - a * db) / (b * b); /* d radial / d r2 */
+        mvt_real drad = da; /* d radial / d r2 */
+        if (cam->has_rational) {
+            const mvt_real db = d[5] + r2 * (MVT_R(2.0) * d[6] + MVT_R(3.0) * r2 * d[7]);
+            drad = (da * b - a * db) / (b * b);
+        }
         jac[0] = radial + MVT_R(2.0) * x * x * drad + MVT_R(2.0) * p1 * y + MVT_R(6.0) * p2 * x;
         jac[1] = MVT_R(2.0) * x * y * drad + MVT_R(2.0) * p1 * x + MVT_R(2.0) * p2 * y;
         jac[2] = jac[1];

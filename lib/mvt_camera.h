@@ -34,6 +34,7 @@ typedef struct mvt_camera {
     mvt_real fx, fy, cx, cy, skew;  /* pixels */
     mvt_real dist[8];
     int has_dist;                   /* 0 when every coefficient is 0 (skip the model) */
+    int has_rational;               /* 0 when k4 = k5 = k6 = 0 (no denominator) */
     mvt_real R[9];                  /* world -> camera rotation */
     mvt_real t[3];                  /* world -> camera translation, metres */
     mvt_real P[12];                 /* K [R | t], 3x4 row-major */

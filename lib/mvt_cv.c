@@ -65,51 +65,55 @@ mvt_err_t mvt_cv_predict_to(mvt_cv_state_t *s, int64_t utime_us, const mvt_real 
     return err;
 }
 
-void mvt_cv_joseph(mvt_cv_state_t *s, int m, const mvt_real *hp, const mvt_real *k, const mvt_real *r)
+void mvt_cv_joseph_hp(mvt_cv_state_t *s, int m, const mvt_real *hpP, const mvt_real *S, const mvt_real *k)
 {
     MVT_ASSERT(m >= 1 && m <= 3);
     mvt_real *P = s->P;
-    /* KH is 6x6 with only its first 3 columns non-zero: kh[i][c] = sum_a K[i][a] Hp[a][c]. */
-    mvt_real kh[6][3];
+    /* Joseph form (I - K H) P (I - K H)^T + K R K^T, expanded as
+     *   P - K (H P) - (H P)^T K^T + K S K^T,   S = H P H^T + R,
+     * which is the same polynomial in K: valid for any gain and, like the product form, only
+     * second-order sensitive to errors in K. Upper triangle computed and mirrored, so P stays
+     * exactly symmetric. ~130 flops for m = 2. */
+    mvt_real ks[6][3]; /* K S - (H P)^T */
     for (int i = 0; i < 6; i++) {
-        for (int c = 0; c < 3; c++) {
-            mvt_real acc = MVT_R(0.0);
+        for (int b = 0; b < m; b++) {
+            mvt_real acc = -hpP[b * 6 + i];
             for (int a = 0; a < m; a++) {
-                acc += k[i * m + a] * hp[a * 3 + c];
+                acc += k[i * m + a] * S[a * m + b];
             }
-            kh[i][c] = acc;
-        }
-    }
-    /* B = (I - KH) P */
-    mvt_real b[36];
-    for (int i = 0; i < 6; i++) {
-        for (int j = 0; j < 6; j++) {
-            b[i * 6 + j] = P[i * 6 + j] - kh[i][0] * P[0 * 6 + j] - kh[i][1] * P[1 * 6 + j] -
-                           kh[i][2] * P[2 * 6 + j];
-        }
-    }
-    /* P = B (I - KH)^T + K R K^T, upper triangle then mirrored (exactly symmetric). */
-    mvt_real kr[6 * 3];
-    for (int i = 0; i < 6; i++) {
-        for (int a = 0; a < m; a++) {
-            mvt_real acc = MVT_R(0.0);
-            for (int c = 0; c < m; c++) {
-                acc += k[i * m + c] * r[c * m + a];
-            }
-            kr[i * 3 + a] = acc;
+            ks[i][b] = acc;
         }
     }
     for (int i = 0; i < 6; i++) {
         for (int j = i; j < 6; j++) {
-            mvt_real v = b[i * 6 + j] - b[i * 6 + 0] * kh[j][0] - b[i * 6 + 1] * kh[j][1] -
-                         b[i * 6 + 2] * kh[j][2];
-            for (int a = 0; a < m; a++) {
-                v += kr[i * 3 + a] * k[j * m + a];
+            mvt_real v = P[i * 6 + j];
+            for (int b = 0; b < m; b++) {
+                v += ks[i][b] * k[j * m + b] - k[i * m + b] * hpP[b * 6 + j];
             }
             P[i * 6 + j] = v;
             P[j * 6 + i] = v;
         }
     }
+}
+
+void mvt_cv_joseph(mvt_cv_state_t *s, int m, const mvt_real *hp, const mvt_real *k, const mvt_real *r)
+{
+    MVT_ASSERT(m >= 1 && m <= 3);
+    const mvt_real *P = s->P;
+    mvt_real hpP[3 * 6]; /* H P (m x 6) */
+    for (int a = 0; a < m; a++) {
+        for (int j = 0; j < 6; j++) {
+            hpP[a * 6 + j] = hp[a * 3 + 0] * P[0 * 6 + j] + hp[a * 3 + 1] * P[1 * 6 + j] + hp[a * 3 + 2] * P[2 * 6 + j];
+        }
+    }
+    mvt_real S[9];
+    for (int a = 0; a < m; a++) {
+        for (int b = 0; b < m; b++) {
+            S[a * m + b] = hpP[a * 6 + 0] * hp[b * 3 + 0] + hpP[a * 6 + 1] * hp[b * 3 + 1] + hpP[a * 6 + 2] * hp[b * 3 + 2] +
+                           r[a * m + b];
+        }
+    }
+    mvt_cv_joseph_hp(s, m, hpP, S, k);
 }
 
 mvt_err_t mvt_cv_update_point(mvt_cv_state_t *s, const mvt_real z[3], const mvt_real R[9], mvt_real gate_chi2,

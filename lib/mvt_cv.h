@@ -51,6 +51,9 @@ mvt_err_t mvt_cv_repair(mvt_cv_state_t *s, mvt_real var_floor);
  * all row-major, m <= 3. Shared by the point and projective updates. */
 void mvt_cv_joseph(mvt_cv_state_t *s, int m, const mvt_real *hp, const mvt_real *k, const mvt_real *r);
 
+/* The same with H P (m x 6, row-major) and S = H P H^T + R (m x m) already computed. */
+void mvt_cv_joseph_hp(mvt_cv_state_t *s, int m, const mvt_real *hpP, const mvt_real *S, const mvt_real *k);
+
 #ifdef __cplusplus
 }
 #endif

@@ -86,21 +86,21 @@ mvt_err_t mvt_pkf_update(mvt_cv_state_t *s, const mvt_pkf_innov_t *in)
     if (mvt_la_inv2_sym(in->S, si) != MVT_OK) {
         return MVT_ERR_NUMERIC;
     }
-    /* PHt = P[:, 0:3] H^T (6x2), K = PHt S^-1 */
+    /* H P (2x6) once; K = (H P)^T S^-1 since P is symmetric */
     const mvt_real *P = s->P;
     const mvt_real *H = in->H;
-    mvt_real k[12];
-    for (int i = 0; i < 6; i++) {
-        const mvt_real a0 = P[i * 6 + 0] * H[0] + P[i * 6 + 1] * H[1] + P[i * 6 + 2] * H[2];
-        const mvt_real a1 = P[i * 6 + 0] * H[3] + P[i * 6 + 1] * H[4] + P[i * 6 + 2] * H[5];
-        k[i * 2 + 0] = a0 * si[0] + a1 * si[1];
-        k[i * 2 + 1] = a0 * si[1] + a1 * si[2];
+    mvt_real hpP[12], k[12];
+    for (int j = 0; j < 6; j++) {
+        hpP[j] = H[0] * P[0 * 6 + j] + H[1] * P[1 * 6 + j] + H[2] * P[2 * 6 + j];
+        hpP[6 + j] = H[3] * P[0 * 6 + j] + H[4] * P[1 * 6 + j] + H[5] * P[2 * 6 + j];
     }
     for (int i = 0; i < 6; i++) {
+        k[i * 2 + 0] = hpP[i] * si[0] + hpP[6 + i] * si[1];
+        k[i * 2 + 1] = hpP[i] * si[1] + hpP[6 + i] * si[2];
         s->x[i] += k[i * 2 + 0] * in->y[0] + k[i * 2 + 1] * in->y[1];
     }
-    const mvt_real r[4] = {in->r, MVT_R(0.0), MVT_R(0.0), in->r};
-    mvt_cv_joseph(s, 2, H, k, r);
+    const mvt_real S[4] = {in->S[0], in->S[1], in->S[1], in->S[2]};
+    mvt_cv_joseph_hp(s, 2, hpP, S, k);
     return MVT_OK;
 }
 

@@ -1,0 +1,233 @@
+/*
+ * mvtrack-bench [NAME...] - benchmarks; one JSON object per line:
+ *   {"bench": NAME, "median_ns": ..., "runs": ..., "iters": ...}
+ * Peers measured in the same run print their own lines (NAME.eigen).
+ *
+ *   filter_update_5cam         one predict + update of one target from 5 cameras, default filter
+ *                              (PKF, Jacobian linearisation, distortion in h, Joseph form), float
+ *   filter_update_5cam.eigen   the same step as a good C++ engineer writes it with fixed-size Eigen
+ *                              (float, batch 10-row update, LLT solve, Joseph form)
+ *   tracker_frame_5cam_1target a whole mvt_tracker_step: 5 cameras, one person, one detection each
+ */
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "mvt_tracker.h"
+
+namespace {
+
+volatile double g_sink;
+
+template <class F>
+void measure(const char *name, int iters, int runs, F &&step)
+{
+    std::vector<double> ns;
+    for (int w = 0; w < iters / 10; w++) step(w); /* warm-up */
+    for (int r = 0; r < runs; r++) {
+        const auto t0 = std::chrono::steady_clock::now();
+        for (int i = 0; i < iters; i++) step(i);
+        const auto t1 = std::chrono::steady_clock::now();
+        ns.push_back(std::chrono::duration<double, std::nano>(t1 - t0).count() / iters);
+    }
+    std::sort(ns.begin(), ns.end());
+    std::printf("{\"bench\": \"%s\", \"median_ns\": %.1f, \"min_ns\": %.1f, \"max_ns\": %.1f, \"runs\": %d, \"iters\": %d}\n",
+                name, ns[ns.size() / 2], ns.front(), ns.back(), runs, iters);
+    std::fflush(stdout);
+}
+
+void look_at(mvt_camera_params_t *p, const double pos[3], const double tgt[3], double f, double k1)
+{
+    std::memset(p, 0, sizeof(*p));
+    Eigen::Vector3d c(pos[0], pos[1], pos[2]), t(tgt[0], tgt[1], tgt[2]);
+    Eigen::Vector3d fw = (t - c).normalized();
+    Eigen::Vector3d up = std::fabs(fw.z()) > 0.99 ? Eigen::Vector3d(0, 1, 0) : Eigen::Vector3d(0, 0, 1);
+    Eigen::Vector3d x = fw.cross(up).normalized(), y = fw.cross(x);
+    Eigen::Matrix3d R;
+    R.row(0) = x;
+    R.row(1) = y;
+    R.row(2) = fw;
+    Eigen::AngleAxisd aa(R);
+    Eigen::Vector3d rv = aa.axis() * aa.angle(), tv = -R * c;
+    for (int i = 0; i < 3; i++) {
+        p->rvec[i] = (mvt_real)rv(i);
+        p->tvec[i] = (mvt_real)tv(i);
+    }
+    const double K[9] = {f, 0, 383.5, 0, f, 287.5, 0, 0, 1};
+    for (int i = 0; i < 9; i++) p->camera_matrix[i] = (mvt_real)K[i];
+    p->dist[0] = (mvt_real)k1;
+    p->dist[1] = (mvt_real)0.06;
+    p->width = 768;
+    p->height = 576;
+    p->sigma_px = 3;
+}
+
+struct Rig5 {
+    mvt_camera_t cams[5];
+    Rig5()
+    {
+        const double tgt[3] = {3, 2.5, 0.9}, down[3] = {3, 2.5, 0};
+        const double pos[5][3] = {{0.15, 0.15, 2.75}, {5.85, 0.15, 2.75}, {5.85, 4.85, 2.75}, {0.15, 4.85, 2.75}, {3, 2.5, 2.95}};
+        for (int k = 0; k < 5; k++) {
+            mvt_camera_params_t p;
+            look_at(&p, pos[k], k == 4 ? down : tgt, k == 4 ? 300 : 420, -0.22);
+            mvt_cam_init(&cams[k], &p);
+        }
+    }
+};
+
+/* ---- the Eigen peer ------------------------------------------------------------------------- */
+using Vec6 = Eigen::Matrix<float, 6, 1>;
+using Mat6 = Eigen::Matrix<float, 6, 6>;
+using Mat10x6 = Eigen::Matrix<float, 10, 6>;
+using Mat10 = Eigen::Matrix<float, 10, 10>;
+using Vec10 = Eigen::Matrix<float, 10, 1>;
+
+struct EigenCam {
+    Eigen::Matrix3f R;
+    Eigen::Vector3f t;
+    float fx, fy, cx, cy, k1, k2, p1, p2, k3;
+    explicit EigenCam(const mvt_camera_t &c)
+    {
+        for (int i = 0; i < 9; i++) R(i / 3, i % 3) = c.R[i];
+        t << c.t[0], c.t[1], c.t[2];
+        fx = c.fx; fy = c.fy; cx = c.cx; cy = c.cy;
+        k1 = c.dist[0]; k2 = c.dist[1]; p1 = c.dist[2]; p2 = c.dist[3]; k3 = c.dist[4];
+    }
+    /* projection with distortion and its Jacobian wrt the world point */
+    Eigen::Vector2f project(const Eigen::Vector3f &X, Eigen::Matrix<float, 2, 3> &J) const
+    {
+        const Eigen::Vector3f Xc = R * X + t;
+        const float iz = 1.0f / Xc.z(), x = Xc.x() * iz, y = Xc.y() * iz;
+        const float r2 = x * x + y * y, rad = 1 + r2 * (k1 + r2 * (k2 + r2 * k3));
+        const float drad = k1 + r2 * (2 * k2 + 3 * r2 * k3);
+        Eigen::Matrix2f Jd;
+        Jd << rad + 2 * x * x * drad + 2 * p1 * y + 6 * p2 * x, 2 * x * y * drad + 2 * p1 * x + 2 * p2 * y,
+            2 * x * y * drad + 2 * p1 * x + 2 * p2 * y, rad + 2 * y * y * drad + 6 * p1 * y + 2 * p2 * x;
+        Eigen::Matrix<float, 2, 3> Jn;
+        Jn << iz, 0, -x * iz, 0, iz, -y * iz;
+        J = Eigen::DiagonalMatrix<float, 2>(fx, fy) * Jd * Jn * R;
+        const float xd = x * rad + 2 * p1 * x * y + p2 * (r2 + 2 * x * x);
+        const float yd = y * rad + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y;
+        return Eigen::Vector2f(fx * xd + cx, fy * yd + cy);
+    }
+};
+
+struct EigenFilter {
+    Vec6 x;
+    Mat6 P;
+    void step(float dt, const Eigen::Vector3f &q, const EigenCam *cams, const Eigen::Vector2f *z, float r)
+    {
+        Mat6 F = Mat6::Identity();
+        F.topRightCorner<3, 3>().diagonal().setConstant(dt);
+        Mat6 Q = Mat6::Zero();
+        for (int i = 0; i < 3; i++) {
+            Q(i, i) = q(i) * dt * dt * dt / 3;
+            Q(i, i + 3) = Q(i + 3, i) = q(i) * dt * dt / 2;
+            Q(i + 3, i + 3) = q(i) * dt;
+        }
+        x = F * x;
+        P = F * P * F.transpose() + Q;
+        Mat10x6 H = Mat10x6::Zero();
+        Vec10 y;
+        for (int k = 0; k < 5; k++) {
+            Eigen::Matrix<float, 2, 3> J;
+            const Eigen::Vector2f h = cams[k].project(x.head<3>(), J);
+            H.block<2, 3>(2 * k, 0) = J;
+            y.segment<2>(2 * k) = z[k] - h;
+        }
+        const Mat10 S = H * P * H.transpose() + Mat10::Identity() * r;
+        const Eigen::LLT<Mat10> llt(S);
+        const Eigen::Matrix<float, 6, 10> K = llt.solve(H * P).transpose();
+        x += K * y;
+        const Mat6 A = Mat6::Identity() - K * H;
+        P = A * P * A.transpose() + r * K * K.transpose();
+    }
+};
+
+}  // namespace
+
+int main(int argc, char **argv)
+{
+    std::vector<std::string> want(argv + 1, argv + argc);
+    auto enabled = [&](const char *n) { return want.empty() || std::find(want.begin(), want.end(), n) != want.end(); };
+    for (const auto &w : want) {
+        if (w == "--help" || w == "-h") {
+            std::printf("usage: mvtrack-bench [filter_update_5cam] [tracker_frame_5cam_1target]\n"
+                        "Prints one JSON object per benchmark (peers: NAME.eigen).\n");
+            return 0;
+        }
+        if (w != "filter_update_5cam" && w != "tracker_frame_5cam_1target") {
+            std::fprintf(stderr, "mvtrack-bench: unknown benchmark '%s'\n", w.c_str());
+            return 2;
+        }
+    }
+    static Rig5 rig;
+    const mvt_real truth[3] = {2.7f, 2.1f, 1.7f};
+    mvt_real uv[5][2];
+    for (int k = 0; k < 5; k++) mvt_cam_project(&rig.cams[k], truth, uv[k], nullptr);
+    const mvt_real q[3] = {0.5f, 0.5f, 0.05f};
+    const int runs = 21;
+
+    if (enabled("filter_update_5cam")) {
+        mvt_cv_state_t s;
+        const mvt_real cov[9] = {1e-3f, 0, 0, 0, 1e-3f, 0, 0, 0, 1e-3f};
+        mvt_cv_init(&s, truth, cov, 0.25f, 0);
+        mvt_pkf_meas_t m[5];
+        for (int k = 0; k < 5; k++) mvt_pkf_meas_make(&rig.cams[k], uv[k], 3.0f, &m[k]);
+        measure("filter_update_5cam", 200000, runs, [&](int i) {
+            mvt_cv_predict(&s, 0.04f, q);
+            for (int k = 0; k < 5; k++) {
+                mvt_pkf_innov_t in;
+                if (mvt_pkf_innovation(&s, &rig.cams[k], MVT_PKF_JACOBIAN, &m[k], &in) == MVT_OK) mvt_pkf_update(&s, &in);
+            }
+            if ((i & 1023) == 0) g_sink += s.x[0];
+        });
+        std::vector<EigenCam> ec;
+        for (int k = 0; k < 5; k++) ec.emplace_back(rig.cams[k]);
+        EigenFilter ef;
+        ef.x << truth[0], truth[1], truth[2], 0, 0, 0;
+        ef.P = Mat6::Identity() * 1e-3f;
+        ef.P.bottomRightCorner<3, 3>() = Eigen::Matrix3f::Identity() * 0.25f;
+        Eigen::Vector2f z[5];
+        for (int k = 0; k < 5; k++) z[k] << uv[k][0], uv[k][1];
+        const Eigen::Vector3f qe(q[0], q[1], q[2]);
+        measure("filter_update_5cam.eigen", 200000, runs, [&](int i) {
+            ef.step(0.04f, qe, ec.data(), z, 9.0f);
+            if ((i & 1023) == 0) g_sink += ef.x(0);
+        });
+        std::fprintf(stderr, "# agreement after the run: |x_mvtrack - x_eigen| = %.3g m\n",
+                     (double)(Eigen::Vector3f(s.x[0], s.x[1], s.x[2]) - ef.x.head<3>()).norm());
+    }
+    if (enabled("tracker_frame_5cam_1target")) {
+        static mvt_tracker_t tr;
+        static mvt_frame_t fr;
+        static mvt_output_t out;
+        mvt_tracker_config_t cfg;
+        mvt_tracker_config_default(&cfg);
+        mvt_tracker_init(&tr, &cfg, rig.cams, 5);
+        std::memset(&fr, 0, sizeof(fr));
+        int64_t t = 0;
+        measure("tracker_frame_5cam_1target", 20000, runs, [&](int i) {
+            t += 40000;
+            fr.utime_us = t;
+            for (int k = 0; k < 5; k++) {
+                fr.views[k].observed = 1;
+                fr.views[k].utime_us = t;
+                fr.views[k].num_detections = 1;
+                fr.views[k].det[0].u = uv[k][0] + (mvt_real)((i * 7 + k) % 5 - 2);
+                fr.views[k].det[0].v = uv[k][1] + (mvt_real)((i * 3 + k) % 5 - 2);
+                fr.views[k].det[0].sigma_px = 3;
+            }
+            mvt_tracker_step(&tr, &fr, &out);
+            if ((i & 1023) == 0) g_sink += out.num_tracks;
+        });
+    }
+    return 0;
+}
