@@ -161,7 +161,6 @@ static void publish_status(daemon_state_t *d)
     memcpy(tmp, d->latency_ms, (size_t)n * sizeof(float));
     st.latency_ms_p50 = percentile(tmp, n, 0.5);
     st.latency_ms_p99 = percentile(tmp, n, 0.99);
-    d->n_proc = 0;
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         const mvt_track_t *tr = &d->tracker.tracks[t];
         if (tr->id == 0) {
