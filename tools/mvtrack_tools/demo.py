@@ -96,7 +96,7 @@ def main(argv: list[str] | None = None) -> int:
     if st is not None:
         print(f"[demo] daemon status: {st.frames_processed} frames, {st.frame_sets_complete} complete sets, "
               f"{st.frame_sets_partial} partial, processing p50 {st.proc_ms_p50:.3f} ms / p99 {st.proc_ms_p99:.3f} ms, "
-              f"latency p50 {st.latency_ms_p50:.3f} ms / p99 {st.latency_ms_p99:.3f} ms (last status period)")
+              f"latency p50 {st.latency_ms_p50:.3f} ms / p99 {st.latency_ms_p99:.3f} ms (last 512 frame sets)")
     print(f"[demo] live PKF: {r.matched}/{r.frames} frames matched within 0.5 m, 3D error mean {r.mean_mm:.1f} mm, "
           f"std {r.std_mm:.1f} mm, RMSE {r.rmse_mm:.1f} mm")
 
@@ -122,7 +122,8 @@ def main(argv: list[str] | None = None) -> int:
                           "3D error of each mode on the demo's detections")
     for p in ("zenithal.png", "zenithal_modes.png", "error_over_time.png"):
         print(f"[demo] plot: {out / p}")
-    print(f"[demo] recorded log: {log_path} (replay: tools/mvtrack ... or lcm-logplayer)")
+    print(f"[demo] recorded log: {log_path}; replay it offline with: build/bin/mvtrackd --rig {rig_path} "
+          f"--in 'file://{log_path.resolve()}?speed=0' --out 'file:///tmp/replay.lcm?mode=w'")
     ok = r.matched >= 0.9 * r.frames
     return 0 if ok else 1
 
