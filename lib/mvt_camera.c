@@ -98,9 +98,7 @@ mvt_err_t mvt_cam_project(const mvt_camera_t *cam, const mvt_real xw[3], mvt_rea
 {
     const mvt_real *R = cam->R;
     mvt_real xc[3];
-    for (int i = 0; i < 3; i++) {
-        xc[i] = R[i * 3 + 0] * xw[0] + R[i * 3 + 1] * xw[1] + R[i * 3 + 2] * xw[2] + cam->t[i];
-    }
+    mvt_cam_to_camera(cam, xw, xc);
     if (!(xc[2] > MVT_R(1e-3))) {
         return MVT_ERR_BEHIND;
     }

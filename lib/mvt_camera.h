@@ -47,6 +47,14 @@ typedef struct mvt_camera {
  * fills cam. MVT_ERR_INVALID / MVT_ERR_NONFINITE on bad input (cam then unusable). */
 mvt_err_t mvt_cam_init(mvt_camera_t *cam, const mvt_camera_params_t *params);
 
+/* World -> camera frame: xc = R xw + t (metres). */
+static inline void mvt_cam_to_camera(const mvt_camera_t *cam, const mvt_real xw[3], mvt_real xc[3])
+{
+    for (int i = 0; i < 3; i++) {
+        xc[i] = cam->R[i * 3 + 0] * xw[0] + cam->R[i * 3 + 1] * xw[1] + cam->R[i * 3 + 2] * xw[2] + cam->t[i];
+    }
+}
+
 /* Camera-frame depth Z of a world point, metres (> 0 in front of the camera). */
 mvt_real mvt_cam_depth(const mvt_camera_t *cam, const mvt_real xw[3]);
 

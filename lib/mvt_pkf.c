@@ -114,9 +114,7 @@ mvt_err_t mvt_pkf_paper_distance(const mvt_cv_state_t *s, const mvt_camera_t *ca
     const mvt_real *R = cam->R;
     const mvt_real *c = s->x;
     mvt_real tc[3]; /* camera-frame position of c */
-    for (int i = 0; i < 3; i++) {
-        tc[i] = R[i * 3 + 0] * c[0] + R[i * 3 + 1] * c[1] + R[i * 3 + 2] * c[2] + cam->t[i];
-    }
+    mvt_cam_to_camera(cam, c, tc);
     if (!(tc[2] > MVT_R(1e-3))) {
         return MVT_ERR_BEHIND;
     }

@@ -78,9 +78,7 @@ mvt_err_t mvt_tri_refine(const mvt_camera_t *cams, const mvt_tri_obs_t *obs, int
         for (int k = 0; k < n; k++) {
             const mvt_camera_t *cam = &cams[obs[k].cam];
             mvt_real xc[3];
-            for (int i = 0; i < 3; i++) {
-                xc[i] = cam->R[i * 3 + 0] * x[0] + cam->R[i * 3 + 1] * x[1] + cam->R[i * 3 + 2] * x[2] + cam->t[i];
-            }
+            mvt_cam_to_camera(cam, x, xc);
             if (!(xc[2] > MVT_R(1e-2))) {
                 return MVT_ERR_BEHIND;
             }
@@ -120,9 +118,7 @@ mvt_real mvt_tri_reproj_px(const mvt_camera_t *cams, const mvt_tri_obs_t *o, con
 {
     const mvt_camera_t *cam = &cams[o->cam];
     mvt_real xc[3];
-    for (int i = 0; i < 3; i++) {
-        xc[i] = cam->R[i * 3 + 0] * x[0] + cam->R[i * 3 + 1] * x[1] + cam->R[i * 3 + 2] * x[2] + cam->t[i];
-    }
+    mvt_cam_to_camera(cam, x, xc);
     if (!(xc[2] > MVT_R(1e-2))) {
         return MVT_TRI_HUGE;
     }
@@ -138,9 +134,7 @@ mvt_err_t mvt_tri_covariance(const mvt_camera_t *cams, const mvt_tri_obs_t *obs,
     for (int k = 0; k < n; k++) {
         const mvt_camera_t *cam = &cams[obs[k].cam];
         mvt_real xc[3];
-        for (int i = 0; i < 3; i++) {
-            xc[i] = cam->R[i * 3 + 0] * x[0] + cam->R[i * 3 + 1] * x[1] + cam->R[i * 3 + 2] * x[2] + cam->t[i];
-        }
+        mvt_cam_to_camera(cam, x, xc);
         if (!(xc[2] > MVT_R(1e-2))) {
             return MVT_ERR_BEHIND;
         }
