@@ -398,6 +398,16 @@ static int parse_pos(const char *s, double *out)
     return 0;
 }
 
+/* Parses a positive option value; prints why not and returns -1 on failure. */
+static int option_pos(const char *opt_name, const char *arg, double *out)
+{
+    if (parse_pos(arg, out) != 0) {
+        fprintf(stderr, "mvtrackd: %s needs a positive number, got '%s'\n", opt_name, arg);
+        return -1;
+    }
+    return 0;
+}
+
 static daemon_state_t g_state; /* large (the tracker and its workspaces): static, not on the stack */
 
 int main(int argc, char **argv)
@@ -422,8 +432,7 @@ int main(int argc, char **argv)
         case 'm': mode = optarg; break;
         case 'g': gate = optarg; break;
         case 'c':
-            if (parse_pos(optarg, &gate_chi2) != 0) {
-                fprintf(stderr, "mvtrackd: --gate-chi2 needs a positive number, got '%s'\n", optarg);
+            if (option_pos("--gate-chi2", optarg, &gate_chi2) != 0) {
                 return 2;
             }
             break;
@@ -434,14 +443,12 @@ int main(int argc, char **argv)
             }
             break;
         case 's':
-            if (parse_pos(optarg, &sigma_px) != 0) {
-                fprintf(stderr, "mvtrackd: --sigma-px needs a positive number, got '%s'\n", optarg);
+            if (option_pos("--sigma-px", optarg, &sigma_px) != 0) {
                 return 2;
             }
             break;
         case 'd':
-            if (parse_pos(optarg, &deadline_ms) != 0) {
-                fprintf(stderr, "mvtrackd: --deadline-ms needs a positive number, got '%s'\n", optarg);
+            if (option_pos("--deadline-ms", optarg, &deadline_ms) != 0) {
                 return 2;
             }
             break;
