@@ -24,18 +24,19 @@ mvt_err_t mvt_pkf_meas_make(const mvt_camera_t *cam, const mvt_real uv[2], mvt_r
     return MVT_OK;
 }
 
-mvt_err_t mvt_pkf_innovation(const mvt_cv_state_t *s, const mvt_camera_t *cam, mvt_pkf_lin_t lin,
-                             const mvt_pkf_meas_t *meas, mvt_pkf_innov_t *out)
+mvt_err_t mvt_pkf_predict_obs(const mvt_cv_state_t *s, const mvt_camera_t *cam, mvt_pkf_lin_t lin,
+                              mvt_pkf_pred_t *out)
 {
     const mvt_real *x = s->x;
+    mvt_real tc[3];
+    mvt_cam_to_camera(cam, x, tc);
+    out->lin = lin;
+    out->depth_m = tc[2];
     if (lin == MVT_PKF_JACOBIAN) {
-        mvt_real uv[2];
-        const mvt_err_t err = mvt_cam_project(cam, x, uv, out->H);
+        const mvt_err_t err = mvt_cam_project(cam, x, out->h, out->H);
         if (err != MVT_OK) {
             return err;
         }
-        out->y[0] = meas->raw[0] - uv[0];
-        out->y[1] = meas->raw[1] - uv[1];
     } else {
         /* Eq. 18: H = alpha P_k (pixel rows), alpha = 1 / (P_k^3 . s) */
         const mvt_real *P = cam->P;
@@ -50,12 +51,10 @@ mvt_err_t mvt_pkf_innovation(const mvt_cv_state_t *s, const mvt_camera_t *cam, m
             out->H[c] = alpha * (P[c] - cu * P[8 + c]);
             out->H[3 + c] = alpha * (P[4 + c] - cv * P[8 + c]);
         }
-        const mvt_real u = alpha * (P[0] * x[0] + P[1] * x[1] + P[2] * x[2] + P[3]);
-        const mvt_real v = alpha * (P[4] * x[0] + P[5] * x[1] + P[6] * x[2] + P[7]);
-        out->y[0] = meas->ideal[0] - u;
-        out->y[1] = meas->ideal[1] - v;
+        out->h[0] = alpha * (P[0] * x[0] + P[1] * x[1] + P[2] * x[2] + P[3]);
+        out->h[1] = alpha * (P[4] * x[0] + P[5] * x[1] + P[6] * x[2] + P[7]);
     }
-    /* S = H Ppp H^T + r I */
+    /* H Ppp H^T */
     const mvt_real *P = s->P;
     mvt_real hp[6]; /* H Ppp, 2x3 */
     for (int a = 0; a < 2; a++) {
@@ -64,10 +63,30 @@ mvt_err_t mvt_pkf_innovation(const mvt_cv_state_t *s, const mvt_camera_t *cam, m
                             out->H[a * 3 + 2] * P[2 * 6 + c];
         }
     }
+    out->hph[0] = hp[0] * out->H[0] + hp[1] * out->H[1] + hp[2] * out->H[2];
+    out->hph[1] = hp[0] * out->H[3] + hp[1] * out->H[4] + hp[2] * out->H[5];
+    out->hph[2] = hp[3] * out->H[3] + hp[4] * out->H[4] + hp[5] * out->H[5];
+    return MVT_OK;
+}
+
+mvt_err_t mvt_pkf_innovation_from(const mvt_pkf_pred_t *pred, const mvt_pkf_meas_t *meas,
+                                  const mvt_real *extra_px2, mvt_pkf_innov_t *out)
+{
+    const mvt_real *z = pred->lin == MVT_PKF_JACOBIAN ? meas->raw : meas->ideal;
+    out->y[0] = z[0] - pred->h[0];
+    out->y[1] = z[1] - pred->h[1];
+    for (int i = 0; i < 6; i++) {
+        out->H[i] = pred->H[i];
+    }
     out->r = meas->var_px2;
-    out->S[0] = hp[0] * out->H[0] + hp[1] * out->H[1] + hp[2] * out->H[2] + out->r;
-    out->S[1] = hp[0] * out->H[3] + hp[1] * out->H[4] + hp[2] * out->H[5];
-    out->S[2] = hp[3] * out->H[3] + hp[4] * out->H[4] + hp[5] * out->H[5] + out->r;
+    out->S[0] = pred->hph[0] + out->r;
+    out->S[1] = pred->hph[1];
+    out->S[2] = pred->hph[2] + out->r;
+    if (extra_px2 != NULL) {
+        out->S[0] += extra_px2[0];
+        out->S[1] += extra_px2[1];
+        out->S[2] += extra_px2[2];
+    }
     mvt_real si[3];
     if (mvt_la_inv2_sym(out->S, si) != MVT_OK) {
         return MVT_ERR_NUMERIC;
@@ -78,6 +97,17 @@ mvt_err_t mvt_pkf_innovation(const mvt_cv_state_t *s, const mvt_camera_t *cam, m
         return MVT_ERR_NUMERIC;
     }
     return MVT_OK;
+}
+
+mvt_err_t mvt_pkf_innovation(const mvt_cv_state_t *s, const mvt_camera_t *cam, mvt_pkf_lin_t lin,
+                             const mvt_pkf_meas_t *meas, mvt_pkf_innov_t *out)
+{
+    mvt_pkf_pred_t pred;
+    const mvt_err_t err = mvt_pkf_predict_obs(s, cam, lin, &pred);
+    if (err != MVT_OK) {
+        return err;
+    }
+    return mvt_pkf_innovation_from(&pred, meas, NULL, out);
 }
 
 mvt_err_t mvt_pkf_update(mvt_cv_state_t *s, const mvt_pkf_innov_t *in)

@@ -49,11 +49,32 @@ typedef struct mvt_pkf_innov {
     mvt_real d2;     /* squared Mahalanobis distance y^T S^-1 y (chi-square, 2 dof) */
 } mvt_pkf_innov_t;
 
+/* A state's predicted observation in one camera, computed once and shared by every detection the
+ * state is tested against (gating is then ~20 flops per pair). */
+typedef struct mvt_pkf_pred {
+    mvt_pkf_lin_t lin;
+    mvt_real h[2];      /* predicted point: raw pixels (JACOBIAN) or ideal pixels (PAPER forms) */
+    mvt_real H[6];      /* 2x3 observation rows on the position */
+    mvt_real hph[3];    /* H Ppp H^T, packed xx xy yy, px^2 */
+    mvt_real depth_m;   /* depth of the predicted point in the camera (> 0) */
+} mvt_pkf_pred_t;
+
 /* Undistorts a detection once. MVT_ERR_NONFINITE / MVT_ERR_NUMERIC / MVT_ERR_INVALID (sigma). */
 mvt_err_t mvt_pkf_meas_make(const mvt_camera_t *cam, const mvt_real uv[2], mvt_real sigma_px,
                             mvt_pkf_meas_t *out);
 
-/* Innovation of meas against state s in camera cam. MVT_ERR_BEHIND when the predicted point is
+/* Predicted observation of state s in camera cam. MVT_ERR_BEHIND when the predicted point is at
+ * or behind the camera. ~90 flops. */
+mvt_err_t mvt_pkf_predict_obs(const mvt_cv_state_t *s, const mvt_camera_t *cam, mvt_pkf_lin_t lin,
+                              mvt_pkf_pred_t *out);
+
+/* Innovation of meas against a predicted observation; extra_px2 (packed xx xy yy, may be NULL)
+ * is added to the measurement covariance (merged blobs). MVT_ERR_NUMERIC when S is not positive
+ * definite. ~25 flops. */
+mvt_err_t mvt_pkf_innovation_from(const mvt_pkf_pred_t *pred, const mvt_pkf_meas_t *meas,
+                                  const mvt_real *extra_px2, mvt_pkf_innov_t *out);
+
+/* Innovation of meas against state s in camera cam (predict_obs, then innovation_from). MVT_ERR_BEHIND when the predicted point is
  * at or behind the camera, MVT_ERR_NUMERIC when S is not positive definite. ~100 flops. */
 mvt_err_t mvt_pkf_innovation(const mvt_cv_state_t *s, const mvt_camera_t *cam, mvt_pkf_lin_t lin,
                              const mvt_pkf_meas_t *meas, mvt_pkf_innov_t *out);

@@ -1,11 +1,14 @@
+/*
+ * mvt_tracker.c - the tracker loop: measurements, predict, associate + update per camera, delete,
+ * initiate. The steps live in mvt_trk_*.c.
+ */
 #include "mvt_tracker.h"
 
 #include <math.h>
 #include <string.h>
 
 #include "mvt_linalg.h"
-
-#define COST_NONE MVT_R(-1.0)
+#include "mvt_trk.h"
 
 void mvt_tracker_config_default(mvt_tracker_config_t *c)
 {
@@ -38,6 +41,7 @@ void mvt_tracker_config_default(mvt_tracker_config_t *c)
     c->max_pos_std_m = MVT_R(1.0);
     c->volume_margin_m = MVT_R(0.5);
     c->var_floor_m2 = MVT_R(1e-10);
+    c->merge_width_m = MVT_R(0.5);
 }
 
 static int config_ok(const mvt_tracker_config_t *c)
@@ -54,6 +58,7 @@ static int config_ok(const mvt_tracker_config_t *c)
            c->confirm_window <= 32 && c->confirm_hits >= 1 && c->confirm_hits <= c->confirm_window &&
            c->tentative_max_misses >= 1 && c->coast_max_s > MVT_R(0.0) && c->max_pos_std_m > MVT_R(0.0) &&
            c->volume_margin_m >= MVT_R(0.0) && c->var_floor_m2 >= MVT_R(0.0) &&
+           c->merge_width_m >= MVT_R(0.0) && isfinite(c->merge_width_m) &&
            (c->filter == MVT_FILTER_PROJECTIVE || c->filter == MVT_FILTER_TRIANGULATE) &&
            (c->gate == MVT_GATE_CHI2 || c->gate == MVT_GATE_PAPER) &&
            (c->lin == MVT_PKF_JACOBIAN || c->lin == MVT_PKF_PAPER || c->lin == MVT_PKF_PAPER_CENTRED);
@@ -72,26 +77,6 @@ mvt_err_t mvt_tracker_init(mvt_tracker_t *self, const mvt_tracker_config_t *cfg,
     memcpy(self->cams, cams, (size_t)num_cameras * sizeof(cams[0]));
     self->next_id = 1;
     return MVT_OK;
-}
-
-static int popcount32(uint32_t x)
-{
-    int n = 0;
-    while (x != 0u) {
-        x &= x - 1u;
-        n++;
-    }
-    return n;
-}
-
-static int inside_volume(const mvt_tracker_config_t *c, const mvt_real x[3])
-{
-    for (int i = 0; i < 3; i++) {
-        if (!(x[i] >= c->volume_min[i] - c->volume_margin_m) || !(x[i] <= c->volume_max[i] + c->volume_margin_m)) {
-            return 0;
-        }
-    }
-    return 1;
 }
 
 /* Undistorts every detection once; counts and drops what is unusable. */
@@ -131,77 +116,6 @@ static void prepare_measurements(mvt_tracker_t *self, const mvt_frame_t *frame)
     }
 }
 
-/* Gating cost of detection d in camera k for track t, or COST_NONE when outside the gate. */
-static mvt_real gate_cost(mvt_tracker_t *self, mvt_track_t *tr, int k, int d)
-{
-    const mvt_tracker_config_t *c = &self->cfg;
-    mvt_pkf_innov_t in;
-    const mvt_pkf_lin_t lin = c->filter == MVT_FILTER_PROJECTIVE ? c->lin : MVT_PKF_JACOBIAN;
-    const mvt_err_t err = mvt_pkf_innovation(&tr->s, &self->cams[k], lin, &self->meas[k][d], &in);
-    if (err != MVT_OK) {
-        return COST_NONE;
-    }
-    if (c->gate == MVT_GATE_PAPER) {
-        mvt_real dist;
-        if (mvt_pkf_paper_distance(&tr->s, &self->cams[k], c->paper_var_m2, c->paper_gamma, &self->meas[k][d],
-                                   &dist) != MVT_OK) {
-            return COST_NONE;
-        }
-        return dist <= c->paper_delta ? dist : COST_NONE;
-    }
-    return in.d2 <= c->gate_chi2 ? in.d2 : COST_NONE;
-}
-
-/* Fills self->cost for camera k, then assigns greedily by increasing cost (each detection to at
- * most one track, each track at most one detection). assign[t] = detection or -1. */
-static void associate_camera(mvt_tracker_t *self, int k, int assign[MVT_MAX_TARGETS])
-{
-    const int nd = self->num_meas[k];
-    int any_in_gate[MVT_MAX_TARGETS];
-    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
-        assign[t] = -1;
-        any_in_gate[t] = 0;
-        mvt_track_t *tr = &self->tracks[t];
-        for (int d = 0; d < nd; d++) {
-            self->cost[t][d] = COST_NONE;
-            if (tr->id == 0 || !self->meas_ok[k][d] || self->used[k][d]) {
-                continue;
-            }
-            self->cost[t][d] = gate_cost(self, tr, k, d);
-            if (self->cost[t][d] >= MVT_R(0.0)) {
-                any_in_gate[t] = 1;
-            }
-        }
-    }
-    for (;;) {
-        mvt_real best = MVT_R(0.0);
-        int bt = -1, bd = -1;
-        for (int t = 0; t < MVT_MAX_TARGETS; t++) {
-            if (self->tracks[t].id == 0 || assign[t] >= 0) {
-                continue;
-            }
-            for (int d = 0; d < nd; d++) {
-                const mvt_real cst = self->cost[t][d];
-                if (cst >= MVT_R(0.0) && !self->used[k][d] && (bt < 0 || cst < best)) {
-                    best = cst;
-                    bt = t;
-                    bd = d;
-                }
-            }
-        }
-        if (bt < 0) {
-            break;
-        }
-        assign[bt] = bd;
-        self->used[k][bd] = 1;
-    }
-    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
-        if (self->tracks[t].id != 0 && nd > 0 && !any_in_gate[t]) {
-            self->counters.gated_out++;
-        }
-    }
-}
-
 static void step_projective(mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order)
 {
     const mvt_tracker_config_t *c = &self->cfg;
@@ -214,22 +128,23 @@ static void step_projective(mvt_tracker_t *self, const mvt_frame_t *frame, const
             }
         }
         int assign[MVT_MAX_TARGETS];
-        associate_camera(self, k, assign);
+        uint8_t merged[MVT_MAX_TARGETS];
+        mvt_trk_associate(self, k, assign, merged);
         for (int t = 0; t < MVT_MAX_TARGETS; t++) {
             mvt_track_t *tr = &self->tracks[t];
             if (tr->id == 0 || assign[t] < 0) {
                 continue;
             }
             mvt_pkf_innov_t in;
-            mvt_err_t err = mvt_pkf_innovation(&tr->s, &self->cams[k], c->lin, &self->meas[k][assign[t]], &in);
+            const mvt_real *extra = self->merge_nb[t] >= 0 ? self->merge_cov[t] : NULL;
+            mvt_err_t err = mvt_pkf_innovation_from(&self->pred[t], &self->meas[k][assign[t]], extra, &in);
             if (err == MVT_OK) {
                 err = mvt_pkf_update(&tr->s, &in);
             }
             if (err == MVT_OK) {
                 tr->cameras_used |= 1u << k;
                 self->counters.updates++;
-            } else if (err == MVT_ERR_BEHIND) {
-                self->counters.behind_camera++;
+                self->counters.merged_updates += merged[t];
             } else {
                 self->counters.numeric_faults++;
             }
@@ -248,8 +163,9 @@ static void step_triangulate(mvt_tracker_t *self, const mvt_frame_t *frame, cons
     /* association of each camera's detections to the predicted tracks (the same gate as the
      * projective filters, so that the comparison isolates the estimator) */
     int assign[MVT_MAX_CAMERAS][MVT_MAX_TARGETS];
+    uint8_t merged[MVT_MAX_TARGETS];
     for (int oi = 0; oi < n_order; oi++) {
-        associate_camera(self, order[oi], assign[oi]);
+        mvt_trk_associate(self, order[oi], assign[oi], merged);
     }
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         mvt_track_t *tr = &self->tracks[t];
@@ -297,218 +213,6 @@ static void step_triangulate(mvt_tracker_t *self, const mvt_frame_t *frame, cons
             self->counters.updates++;
         } else {
             self->counters.numeric_faults++;
-        }
-    }
-}
-
-static mvt_real birth_threshold(const mvt_tracker_config_t *c, const mvt_pkf_meas_t *m)
-{
-    const mvt_real t = c->birth_reproj_sigma * MVT_SQRT(m->var_px2);
-    return t > c->birth_min_reproj_px ? t : c->birth_min_reproj_px;
-}
-
-static int near_existing_track(const mvt_tracker_t *self, const mvt_real x[3])
-{
-    const mvt_real r2 = self->cfg.birth_min_sep_m * self->cfg.birth_min_sep_m;
-    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
-        const mvt_track_t *tr = &self->tracks[t];
-        if (tr->id == 0) {
-            continue;
-        }
-        const mvt_real dx = tr->s.x[0] - x[0], dy = tr->s.x[1] - x[1], dz = tr->s.x[2] - x[2];
-        if (dx * dx + dy * dy + dz * dz < r2) {
-            return 1;
-        }
-    }
-    return 0;
-}
-
-/* Best-supported unused multi-view point, or 0 when none reaches birth_min_views. */
-static int find_birth(mvt_tracker_t *self, const int order[], int n_order, mvt_tri_obs_t obs[], int det_of[], int *n_obs)
-{
-    const mvt_tracker_config_t *c = &self->cfg;
-    int best_n = 0;
-    mvt_real best_err = MVT_R(0.0);
-    for (int ai = 0; ai < n_order; ai++) {
-        const int a = order[ai];
-        for (int i = 0; i < self->num_meas[a]; i++) {
-            if (!self->meas_ok[a][i] || self->used[a][i]) {
-                continue;
-            }
-            for (int bi = ai + 1; bi < n_order; bi++) {
-                const int b = order[bi];
-                for (int j = 0; j < self->num_meas[b]; j++) {
-                    if (!self->meas_ok[b][j] || self->used[b][j]) {
-                        continue;
-                    }
-                    mvt_tri_obs_t cand[MVT_MAX_CAMERAS];
-                    int cand_det[MVT_MAX_CAMERAS];
-                    const mvt_pkf_meas_t *ma = &self->meas[a][i], *mb = &self->meas[b][j];
-                    cand[0] = (mvt_tri_obs_t){a, {ma->xn[0], ma->xn[1]}, ma->var_px2};
-                    cand[1] = (mvt_tri_obs_t){b, {mb->xn[0], mb->xn[1]}, mb->var_px2};
-                    cand_det[0] = i;
-                    cand_det[1] = j;
-                    mvt_real x[3];
-                    if (mvt_tri_linear(self->cams, cand, 2, x) != MVT_OK || !inside_volume(c, x)) {
-                        continue;
-                    }
-                    const mvt_real ea = mvt_tri_reproj_px(self->cams, &cand[0], x);
-                    const mvt_real eb = mvt_tri_reproj_px(self->cams, &cand[1], x);
-                    if (ea > birth_threshold(c, ma) || eb > birth_threshold(c, mb)) {
-                        continue;
-                    }
-                    int n = 2;
-                    mvt_real err = ea + eb;
-                    for (int ci = 0; ci < n_order; ci++) {
-                        const int k = order[ci];
-                        if (k == a || k == b) {
-                            continue;
-                        }
-                        int bd = -1;
-                        mvt_real be = MVT_R(0.0);
-                        for (int d = 0; d < self->num_meas[k]; d++) {
-                            if (!self->meas_ok[k][d] || self->used[k][d]) {
-                                continue;
-                            }
-                            const mvt_pkf_meas_t *mk = &self->meas[k][d];
-                            const mvt_tri_obs_t o = {k, {mk->xn[0], mk->xn[1]}, mk->var_px2};
-                            const mvt_real e = mvt_tri_reproj_px(self->cams, &o, x);
-                            if (e <= birth_threshold(c, mk) && (bd < 0 || e < be)) {
-                                bd = d;
-                                be = e;
-                            }
-                        }
-                        if (bd >= 0) {
-                            const mvt_pkf_meas_t *mk = &self->meas[k][bd];
-                            cand[n] = (mvt_tri_obs_t){k, {mk->xn[0], mk->xn[1]}, mk->var_px2};
-                            cand_det[n] = bd;
-                            err += be;
-                            n++;
-                        }
-                    }
-                    if (n > best_n || (n == best_n && err < best_err)) {
-                        best_n = n;
-                        best_err = err;
-                        memcpy(obs, cand, (size_t)n * sizeof(cand[0]));
-                        memcpy(det_of, cand_det, (size_t)n * sizeof(cand_det[0]));
-                    }
-                }
-            }
-        }
-    }
-    *n_obs = best_n;
-    return best_n >= c->birth_min_views;
-}
-
-static void initiate(mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order)
-{
-    const mvt_tracker_config_t *c = &self->cfg;
-    for (int round = 0; round < MVT_MAX_TARGETS; round++) {
-        mvt_tri_obs_t obs[MVT_MAX_CAMERAS];
-        int det_of[MVT_MAX_CAMERAS];
-        int n = 0;
-        if (!find_birth(self, order, n_order, obs, det_of, &n)) {
-            return;
-        }
-        for (int i = 0; i < n; i++) { /* consumed whatever happens next */
-            self->used[obs[i].cam][det_of[i]] = 1;
-        }
-        mvt_real x[3], cov[9];
-        uint32_t inl = 0;
-        int m = 0;
-        const mvt_real thr = birth_threshold(c, &self->meas[obs[0].cam][det_of[0]]);
-        if (mvt_tri_robust(self->cams, obs, n, thr, x, &inl, &m) != MVT_OK || m < c->birth_min_views ||
-            !inside_volume(c, x) || near_existing_track(self, x)) {
-            continue;
-        }
-        mvt_tri_obs_t in[MVT_MAX_CAMERAS];
-        uint32_t bits = 0;
-        int mi = 0;
-        for (int i = 0; i < n; i++) {
-            if (inl & (1u << i)) {
-                in[mi++] = obs[i];
-                bits |= 1u << obs[i].cam;
-            }
-        }
-        if (mvt_tri_covariance(self->cams, in, mi, x, cov) != MVT_OK) {
-            continue;
-        }
-        int slot = -1;
-        for (int t = 0; t < MVT_MAX_TARGETS; t++) {
-            if (self->tracks[t].id == 0) {
-                slot = t;
-                break;
-            }
-        }
-        if (slot < 0) {
-            self->counters.births_refused_full++;
-            continue;
-        }
-        mvt_track_t *tr = &self->tracks[slot];
-        memset(tr, 0, sizeof(*tr));
-        tr->id = self->next_id++;
-        if (self->next_id <= 0) { /* 2^31 births: wrap to 1 rather than reuse 0 or go negative */
-            self->next_id = 1;
-        }
-        tr->status = c->confirm_hits <= 1 ? MVT_TRACK_CONFIRMED : MVT_TRACK_TENTATIVE;
-        mvt_cv_init(&tr->s, x, cov, c->init_vel_std_ms * c->init_vel_std_ms, frame->utime_us);
-        tr->cameras_used = bits;
-        tr->hit_history = 1u;
-        tr->last_update_us = frame->utime_us;
-        self->counters.births++;
-    }
-}
-
-static void manage(mvt_tracker_t *self, int64_t now_us)
-{
-    const mvt_tracker_config_t *c = &self->cfg;
-    const uint32_t window = c->confirm_window >= 32 ? 0xffffffffu : ((1u << c->confirm_window) - 1u);
-    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
-        mvt_track_t *tr = &self->tracks[t];
-        if (tr->id == 0) {
-            continue;
-        }
-        const int hit = tr->cameras_used != 0u;
-        tr->hit_history = (tr->hit_history << 1) | (hit ? 1u : 0u);
-        if (hit) {
-            tr->misses = 0;
-            tr->last_update_us = now_us;
-        } else {
-            tr->misses++;
-        }
-        int drop = 0;
-        if (mvt_cv_repair(&tr->s, c->var_floor_m2) != MVT_OK) {
-            self->counters.numeric_faults++;
-            drop = 1;
-        }
-        const mvt_real *P = tr->s.P;
-        const mvt_real var_max = c->max_pos_std_m * c->max_pos_std_m;
-        const mvt_real unseen_s = (mvt_real)((double)(now_us - tr->last_update_us) * 1e-6);
-        switch (tr->status) {
-        case MVT_TRACK_TENTATIVE:
-            if (tr->misses >= c->tentative_max_misses) {
-                drop = 1;
-            } else if (popcount32(tr->hit_history & window) >= c->confirm_hits) {
-                tr->status = MVT_TRACK_CONFIRMED;
-            }
-            break;
-        case MVT_TRACK_CONFIRMED:
-        case MVT_TRACK_COASTING:
-            tr->status = hit ? MVT_TRACK_CONFIRMED : MVT_TRACK_COASTING;
-            if (unseen_s > c->coast_max_s) {
-                drop = 1;
-            }
-            break;
-        default:
-            drop = 1;
-            break;
-        }
-        if (P[0] > var_max || P[7] > var_max || P[14] > var_max || !inside_volume(c, tr->s.x)) {
-            drop = 1;
-        }
-        if (drop) {
-            tr->id = 0;
-            self->counters.deletions++;
         }
     }
 }
@@ -590,10 +294,105 @@ mvt_err_t mvt_tracker_step(mvt_tracker_t *self, const mvt_frame_t *frame, mvt_ou
             (void)mvt_cv_predict_to(&self->tracks[t].s, frame->utime_us, self->cfg.q_m2s3);
         }
     }
-    manage(self, frame->utime_us);
-    initiate(self, frame, order, n_order);
+    mvt_trk_delete(self, frame->utime_us);
+    mvt_trk_initiate(self, frame, order, n_order);
     if (out != NULL) {
         mvt_tracker_output(self, frame->utime_us, out);
     }
     return MVT_OK;
+}
+
+int mvt_tracker_select(const mvt_tracker_t *self, int cam, const mvt_detection_t *in, int n_in,
+                       int keep[MVT_MAX_DETECTIONS])
+{
+    MVT_ASSERT(self != NULL && in != NULL && keep != NULL);
+    if (n_in <= 0 || cam < 0 || cam >= self->num_cameras) {
+        return 0;
+    }
+    if (n_in <= MVT_MAX_DETECTIONS) {
+        for (int i = 0; i < n_in; i++) {
+            keep[i] = i;
+        }
+        return n_in;
+    }
+    const mvt_camera_t *camera = &self->cams[cam];
+    int n = 0;
+    /* 1. each track's nearest detection inside its gate (raw pixels, Jacobian prediction) */
+    for (int t = 0; t < MVT_MAX_TARGETS && n < MVT_MAX_DETECTIONS; t++) {
+        const mvt_track_t *tr = &self->tracks[t];
+        mvt_pkf_pred_t pred;
+        if (tr->id == 0 || mvt_pkf_predict_obs(&tr->s, camera, MVT_PKF_JACOBIAN, &pred) != MVT_OK) {
+            continue;
+        }
+        int best = -1;
+        mvt_real best_d2 = MVT_R(0.0);
+        for (int i = 0; i < n_in; i++) {
+            const mvt_real sigma = in[i].sigma_px > MVT_R(0.0) ? in[i].sigma_px : camera->sigma_px;
+            mvt_pkf_meas_t m;
+            m.raw[0] = in[i].u;
+            m.raw[1] = in[i].v;
+            m.ideal[0] = m.ideal[1] = m.xn[0] = m.xn[1] = MVT_R(0.0);
+            m.var_px2 = sigma * sigma;
+            mvt_pkf_innov_t inn;
+            if (!isfinite(in[i].u) || !isfinite(in[i].v) || !isfinite(sigma) ||
+                mvt_pkf_innovation_from(&pred, &m, NULL, &inn) != MVT_OK || !(inn.d2 <= self->cfg.gate_chi2)) {
+                continue;
+            }
+            if (best < 0 || inn.d2 < best_d2) {
+                best = i;
+                best_d2 = inn.d2;
+            }
+        }
+        int dup = 0;
+        for (int j = 0; j < n && !dup; j++) {
+            dup = keep[j] == best;
+        }
+        if (best >= 0 && !dup) {
+            keep[n++] = best;
+        }
+    }
+    const int n_track = n;
+    /* 2. the rest by decreasing score (a NaN score ranks last), ties by input order: a bounded
+     * sorted insertion into keep[n_track..] */
+    for (int i = 0; i < n_in; i++) {
+        int taken = 0;
+        for (int j = 0; j < n_track && !taken; j++) {
+            taken = keep[j] == i;
+        }
+        if (taken) {
+            continue;
+        }
+        const mvt_real s = isfinite(in[i].score) ? in[i].score : MVT_R(-1e30);
+        int pos = n;
+        while (pos > n_track) {
+            const int o = keep[pos - 1];
+            const mvt_real so = isfinite(in[o].score) ? in[o].score : MVT_R(-1e30);
+            if (!(s > so)) {
+                break;
+            }
+            pos--;
+        }
+        if (pos >= MVT_MAX_DETECTIONS) {
+            continue;
+        }
+        const int last = n < MVT_MAX_DETECTIONS ? n : MVT_MAX_DETECTIONS - 1;
+        for (int j = last; j > pos; j--) {
+            keep[j] = keep[j - 1];
+        }
+        keep[pos] = i;
+        if (n < MVT_MAX_DETECTIONS) {
+            n++;
+        }
+    }
+    /* increasing input order */
+    for (int i = 1; i < n; i++) {
+        const int key = keep[i];
+        int j = i - 1;
+        while (j >= 0 && keep[j] > key) {
+            keep[j + 1] = keep[j];
+            j--;
+        }
+        keep[j + 1] = key;
+    }
+    return n;
 }

@@ -1,9 +1,20 @@
 /*
  * mvt_tracker.h - multi-view 3D tracker: the per-frame loop over the core's components.
  *
- * One call per frame set: predict -> gate -> associate (per camera, in capture-time order) ->
- * update -> delete -> initiate. The caller owns the mvt_tracker_t (about sizeof(mvt_tracker_t)
- * bytes, reported by mvt-footprint); nothing is allocated, nothing is printed.
+ * One call per frame set, shaped like Stone Soup's tracker loop, one module per step:
+ *   predict      mvt_cv (to each camera's capture time, cameras in capture-time order)
+ *   hypothesise  mvt_trk_assoc.c: per camera, every track's predicted observation, the gate
+ *                (chi-square on the innovation, or the paper's ellipsoid test) and the merged-blob
+ *                test (tracks whose image points are closer than merge_width_m at their depth)
+ *   associate    mvt_trk_assoc.c: global nearest neighbour per camera (Hungarian method,
+ *                mvt_assoc, on each cluster of tracks that compete for detections); a detection
+ *                may update several tracks only when they are unresolved in that view
+ *   update       mvt_pkf (or mvt_tri + mvt_cv for the triangulating baseline)
+ *   delete       mvt_trk_delete.c: M-of-N confirmation, coasting, deletion by time unseen,
+ *                uncertainty or leaving the volume
+ *   initiate     mvt_trk_init.c: unassigned detections that agree in >= birth_min_views views
+ * The caller owns the mvt_tracker_t (sizeof(mvt_tracker_t) bytes); nothing is allocated, nothing
+ * is printed. Identities count up from 1 and are never reused (they wrap only after 2^31 births).
  *
  * Filters (mvt_tracker_config_t.filter):
  *   MVT_FILTER_PROJECTIVE   each camera's pixels update the 3D state directly (PKF family;
@@ -14,6 +25,7 @@
 #ifndef MVT_TRACKER_H
 #define MVT_TRACKER_H
 
+#include "mvt_assoc.h"
 #include "mvt_camera.h"
 #include "mvt_cv.h"
 #include "mvt_pkf.h"
@@ -61,6 +73,11 @@ typedef struct mvt_tracker_config {
     mvt_real volume_max[3];
     mvt_real volume_margin_m;   /* births and tracks may be this far outside; default 0.5 */
     mvt_real var_floor_m2;      /* covariance diagonal floor; default 1e-10 */
+    mvt_real merge_width_m;     /* merged blobs: two tracks whose predicted image points in a view
+                                   are closer than this width seen at their depth are unresolved
+                                   there, and one detection may update both, with its covariance
+                                   widened along their separation; 0 disables (strict one-to-one);
+                                   default 0.5 */
 } mvt_tracker_config_t;
 
 /* One detection as the core needs it (raw distorted pixels). */
@@ -117,6 +134,8 @@ typedef struct mvt_counters {
     uint64_t births;
     uint64_t births_refused_full;     /* MVT_MAX_TARGETS reached */
     uint64_t deletions;
+    uint64_t merged_updates;          /* updates from a detection shared by unresolved tracks */
+    uint64_t birth_candidates_dropped;/* multi-view birth candidates beyond MVT_MAX_BIRTH_CANDIDATES */
 } mvt_counters_t;
 
 typedef struct mvt_track {
@@ -128,6 +147,21 @@ typedef struct mvt_track {
     int32_t misses;             /* consecutive frames without update */
     int64_t last_update_us;
 } mvt_track_t;
+
+/* Multi-view birth candidates examined per frame (the best are kept; the excess is counted). */
+#ifndef MVT_MAX_BIRTH_CANDIDATES
+#define MVT_MAX_BIRTH_CANDIDATES 128
+#endif
+#if MVT_MAX_BIRTH_CANDIDATES < 1 || MVT_MAX_BIRTH_CANDIDATES > 4096
+#error "MVT_MAX_BIRTH_CANDIDATES must be in 1..4096"
+#endif
+
+typedef struct mvt_birth_cand {
+    int16_t n;                          /* views */
+    int16_t cam[MVT_MAX_CAMERAS];
+    int16_t det[MVT_MAX_CAMERAS];
+    mvt_real err_px;                    /* summed reprojection error */
+} mvt_birth_cand_t;
 
 typedef struct mvt_tracker {
     mvt_tracker_config_t cfg;
@@ -143,7 +177,20 @@ typedef struct mvt_tracker {
     uint8_t meas_ok[MVT_MAX_CAMERAS][MVT_MAX_DETECTIONS];
     uint8_t used[MVT_MAX_CAMERAS][MVT_MAX_DETECTIONS];
     int num_meas[MVT_MAX_CAMERAS];
-    mvt_real cost[MVT_MAX_TARGETS][MVT_MAX_DETECTIONS];
+    mvt_real cost[MVT_MAX_TARGETS][MVT_MAX_DETECTIONS]; /* < 0: outside the gate */
+    mvt_pkf_pred_t pred[MVT_MAX_TARGETS];
+    uint8_t pred_ok[MVT_MAX_TARGETS];
+    int16_t merge_nb[MVT_MAX_TARGETS];       /* nearest unresolved track in this view, or -1 */
+    mvt_real merge_cov[MVT_MAX_TARGETS][3];  /* extra measurement covariance, px^2 */
+    int16_t cluster[MVT_MAX_TARGETS];        /* union-find parent */
+    int16_t det_first[MVT_MAX_DETECTIONS];   /* first track gating detection d, or -1 */
+    int16_t cl_rows[MVT_MAX_TARGETS];
+    int16_t cl_cols[MVT_MAX_DETECTIONS];
+    int cl_assign[MVT_MAX_TARGETS];
+    mvt_real cl_cost[MVT_ASSOC_MAX_ROWS * MVT_ASSOC_MAX_COLS];
+    mvt_assoc_ws_t assoc_ws;
+    mvt_birth_cand_t cand[MVT_MAX_BIRTH_CANDIDATES];
+    int num_cand;
 } mvt_tracker_t;
 
 /* Fills cfg with the documented defaults (volume: a 10 m cube around the origin, z >= 0). */
@@ -158,6 +205,15 @@ mvt_err_t mvt_tracker_init(mvt_tracker_t *self, const mvt_tracker_config_t *cfg,
  * plus O(C^2 * D^2 * C * D) for births with C cameras, T tracks, D detections per camera.
  * MVT_ERR_INVALID (counted, state unchanged) when frame->utime_us is earlier than the last frame. */
 mvt_err_t mvt_tracker_step(mvt_tracker_t *self, const mvt_frame_t *frame, mvt_output_t *out);
+
+/* Chooses which of n_in > MVT_MAX_DETECTIONS detections of camera cam to keep (a flood of false
+ * alarms must not push out the detections that feed existing tracks): first, for every track,
+ * the detection nearest to its predicted image point inside the chi-square gate, then the rest
+ * by decreasing score (ties: input order). keep[] receives up to MVT_MAX_DETECTIONS input indices
+ * in increasing order; returns how many (n_in - that = dropped). Does not change the tracker.
+ * Cost O(T * n_in + n_in * MVT_MAX_DETECTIONS); memory: the caller's keep[] and in[] only. */
+int mvt_tracker_select(const mvt_tracker_t *self, int cam, const mvt_detection_t *in, int n_in,
+                       int keep[MVT_MAX_DETECTIONS]);
 
 /* Fills out with the current tracks (no processing). */
 void mvt_tracker_output(const mvt_tracker_t *self, int64_t utime_us, mvt_output_t *out);

@@ -1,0 +1,95 @@
+#include "mvt_assoc.h"
+
+#include <math.h>
+
+static int feasible(mvt_real c)
+{
+    return c >= MVT_R(0.0) && isfinite(c);
+}
+
+mvt_err_t mvt_assoc_solve(const mvt_real *cost, int n_rows, int n_cols, int stride, int *row_to_col,
+                          mvt_assoc_ws_t *ws)
+{
+    MVT_ASSERT(cost != NULL && row_to_col != NULL && ws != NULL);
+    if (n_rows < 1 || n_rows > n_cols || n_rows > MVT_ASSOC_MAX_ROWS || n_cols > MVT_ASSOC_MAX_COLS ||
+        stride < n_cols) {
+        return MVT_ERR_INVALID;
+    }
+    /* a forbidden entry costs more than any full assignment of feasible ones */
+    mvt_real worst = MVT_R(0.0);
+    for (int r = 0; r < n_rows; r++) {
+        for (int c = 0; c < n_cols; c++) {
+            const mvt_real x = cost[r * stride + c];
+            if (feasible(x) && x > worst) {
+                worst = x;
+            }
+        }
+    }
+    const mvt_real big = (worst + MVT_R(1.0)) * (mvt_real)(n_rows + 1);
+    const mvt_real inf = big * (mvt_real)(4 * (n_rows + 1));
+    /* 1-based potentials; column 0 is the virtual start of each augmenting path */
+    for (int j = 0; j <= n_cols; j++) {
+        ws->v[j] = MVT_R(0.0);
+        ws->p[j] = 0;
+        ws->way[j] = 0;
+    }
+    for (int i = 0; i <= n_rows; i++) {
+        ws->u[i] = MVT_R(0.0);
+    }
+    for (int i = 1; i <= n_rows; i++) {
+        ws->p[0] = (int16_t)i;
+        int j0 = 0;
+        for (int j = 0; j <= n_cols; j++) {
+            ws->minv[j] = inf;
+            ws->used[j] = 0;
+        }
+        do {
+            ws->used[j0] = 1;
+            const int i0 = ws->p[j0];
+            mvt_real delta = inf;
+            int j1 = 0;
+            for (int j = 1; j <= n_cols; j++) {
+                if (ws->used[j]) {
+                    continue;
+                }
+                const mvt_real a = cost[(i0 - 1) * stride + (j - 1)];
+                const mvt_real cur = (feasible(a) ? a : big) - ws->u[i0] - ws->v[j];
+                if (cur < ws->minv[j]) {
+                    ws->minv[j] = cur;
+                    ws->way[j] = (int16_t)j0;
+                }
+                if (ws->minv[j] < delta) {
+                    delta = ws->minv[j];
+                    j1 = j;
+                }
+            }
+            if (j1 == 0) {
+                return MVT_ERR_NUMERIC; /* only with non-finite arithmetic; cannot happen otherwise */
+            }
+            for (int j = 0; j <= n_cols; j++) {
+                if (ws->used[j]) {
+                    ws->u[ws->p[j]] += delta;
+                    ws->v[j] -= delta;
+                } else {
+                    ws->minv[j] -= delta;
+                }
+            }
+            j0 = j1;
+        } while (ws->p[j0] != 0);
+        do {
+            const int j1 = ws->way[j0];
+            ws->p[j0] = ws->p[j1];
+            j0 = j1;
+        } while (j0 != 0);
+    }
+    for (int r = 0; r < n_rows; r++) {
+        row_to_col[r] = -1;
+    }
+    for (int j = 1; j <= n_cols; j++) {
+        const int i = ws->p[j];
+        if (i > 0 && feasible(cost[(i - 1) * stride + (j - 1)])) {
+            row_to_col[i - 1] = j - 1;
+        }
+    }
+    return MVT_OK;
+}

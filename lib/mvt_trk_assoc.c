@@ -1,0 +1,258 @@
+/*
+ * mvt_trk_assoc.c - hypothesiser and data associator of the tracker loop (one camera at a time).
+ *
+ * Hypotheses: each live track's predicted observation in the camera (mvt_pkf_pred_t), gated
+ * against every detection. Association: global nearest neighbour by the Hungarian method on each
+ * cluster of tracks linked through shared gated detections, with a "missed" column per track at
+ * the gate's cost, so one detection feeds at most one track. Merged blobs: tracks whose image
+ * points are closer than merge_width_m seen at their depth are unresolved in this view; their
+ * measurement covariance is widened by D D^T / 3 (D = the image separation to the nearest
+ * unresolved track: a uniform offset of up to |D| toward it has second moment |D|^2 / 3), and a
+ * track left without a detection may share the one assigned to an unresolved neighbour if it
+ * passes its own (widened) gate. docs/tracking.md measures the alternatives.
+ */
+#include <math.h>
+#include <string.h>
+
+#include "mvt_trk.h"
+
+static int find_root(int16_t *parent, int t)
+{
+    while (parent[t] != t) {
+        parent[t] = parent[parent[t]];
+        t = parent[t];
+    }
+    return t;
+}
+
+static mvt_real miss_cost(const mvt_tracker_config_t *c)
+{
+    return c->gate == MVT_GATE_PAPER ? c->paper_delta : c->gate_chi2;
+}
+
+/* Squared image distance between two predictions and the squared merge radius in pixels. */
+static int unresolved(const mvt_tracker_t *self, const mvt_camera_t *cam, int t, int u, mvt_real *d2_px)
+{
+    const mvt_pkf_pred_t *a = &self->pred[t], *b = &self->pred[u];
+    const mvt_real dx = a->h[0] - b->h[0], dy = a->h[1] - b->h[1];
+    const mvt_real depth = a->depth_m < b->depth_m ? a->depth_m : b->depth_m;
+    const mvt_real w = cam->fx * self->cfg.merge_width_m / depth;
+    *d2_px = dx * dx + dy * dy;
+    return *d2_px < w * w;
+}
+
+static void hypothesise(mvt_tracker_t *self, int k, const int live[], int n_live)
+{
+    const mvt_tracker_config_t *c = &self->cfg;
+    const mvt_camera_t *cam = &self->cams[k];
+    const mvt_pkf_lin_t lin = c->filter == MVT_FILTER_PROJECTIVE ? c->lin : MVT_PKF_JACOBIAN;
+    const int nd = self->num_meas[k];
+    for (int i = 0; i < n_live; i++) {
+        const int t = live[i];
+        self->merge_nb[t] = -1;
+        const mvt_err_t err = mvt_pkf_predict_obs(&self->tracks[t].s, cam, lin, &self->pred[t]);
+        self->pred_ok[t] = err == MVT_OK;
+        if (err == MVT_ERR_BEHIND) {
+            self->counters.behind_camera++;
+        } else if (err != MVT_OK) {
+            self->counters.numeric_faults++;
+        }
+    }
+    if (c->merge_width_m > MVT_R(0.0)) {
+        mvt_real best[MVT_MAX_TARGETS];
+        for (int i = 0; i < n_live; i++) {
+            best[live[i]] = MVT_R(0.0);
+        }
+        for (int i = 0; i < n_live; i++) {
+            const int t = live[i];
+            for (int j = i + 1; j < n_live && self->pred_ok[t]; j++) {
+                const int u = live[j];
+                mvt_real d2;
+                if (!self->pred_ok[u] || !unresolved(self, cam, t, u, &d2)) {
+                    continue;
+                }
+                if (self->merge_nb[t] < 0 || d2 < best[t]) {
+                    self->merge_nb[t] = (int16_t)u;
+                    best[t] = d2;
+                }
+                if (self->merge_nb[u] < 0 || d2 < best[u]) {
+                    self->merge_nb[u] = (int16_t)t;
+                    best[u] = d2;
+                }
+            }
+        }
+        for (int i = 0; i < n_live; i++) {
+            const int t = live[i];
+            if (self->merge_nb[t] < 0) {
+                continue;
+            }
+            const mvt_pkf_pred_t *a = &self->pred[t], *b = &self->pred[self->merge_nb[t]];
+            const mvt_real dx = a->h[0] - b->h[0], dy = a->h[1] - b->h[1];
+            const mvt_real third = MVT_R(1.0) / MVT_R(3.0);
+            self->merge_cov[t][0] = dx * dx * third;
+            self->merge_cov[t][1] = dx * dy * third;
+            self->merge_cov[t][2] = dy * dy * third;
+        }
+    }
+    for (int i = 0; i < n_live; i++) {
+        const int t = live[i];
+        int any = 0;
+        for (int d = 0; d < nd; d++) {
+            mvt_real cost = MVT_R(-1.0);
+            if (self->pred_ok[t] && self->meas_ok[k][d] && !self->used[k][d]) {
+                mvt_pkf_innov_t in;
+                const mvt_real *extra = self->merge_nb[t] >= 0 ? self->merge_cov[t] : NULL;
+                if (mvt_pkf_innovation_from(&self->pred[t], &self->meas[k][d], extra, &in) == MVT_OK) {
+                    if (c->gate == MVT_GATE_PAPER) {
+                        mvt_real dist;
+                        if (mvt_pkf_paper_distance(&self->tracks[t].s, cam, c->paper_var_m2, c->paper_gamma,
+                                                   &self->meas[k][d], &dist) == MVT_OK &&
+                            dist <= c->paper_delta) {
+                            cost = dist;
+                        }
+                    } else if (in.d2 <= c->gate_chi2) {
+                        cost = in.d2;
+                    }
+                }
+            }
+            self->cost[t][d] = cost;
+            any |= cost >= MVT_R(0.0);
+        }
+        if (self->pred_ok[t] && nd > 0 && !any) {
+            self->counters.gated_out++;
+        }
+    }
+}
+
+/* Solves one cluster (tracks with root r) with the Hungarian method. */
+static void solve_cluster(mvt_tracker_t *self, int k, int r, const int live[], int n_live, int assign[])
+{
+    const int nd = self->num_meas[k];
+    int nr = 0, nc = 0;
+    for (int i = 0; i < n_live; i++) {
+        const int t = live[i];
+        if (self->cluster[t] >= 0 && find_root(self->cluster, t) == r) {
+            self->cl_rows[nr++] = (int16_t)t;
+        }
+    }
+    for (int d = 0; d < nd; d++) {
+        if (self->det_first[d] >= 0 && find_root(self->cluster, self->det_first[d]) == r) {
+            self->cl_cols[nc++] = (int16_t)d;
+        }
+    }
+    if (nr == 1 && nc == 1) {
+        assign[self->cl_rows[0]] = self->cl_cols[0];
+        return;
+    }
+    const int ncols = nc + nr;
+    const mvt_real miss = miss_cost(&self->cfg);
+    for (int i = 0; i < nr; i++) {
+        mvt_real *row = &self->cl_cost[i * ncols];
+        for (int j = 0; j < nc; j++) {
+            row[j] = self->cost[self->cl_rows[i]][self->cl_cols[j]];
+        }
+        for (int j = 0; j < nr; j++) {
+            row[nc + j] = i == j ? miss : MVT_R(-1.0);
+        }
+    }
+    if (mvt_assoc_solve(self->cl_cost, nr, ncols, ncols, self->cl_assign, &self->assoc_ws) != MVT_OK) {
+        self->counters.numeric_faults++;
+        return;
+    }
+    for (int i = 0; i < nr; i++) {
+        const int j = self->cl_assign[i];
+        if (j >= 0 && j < nc) {
+            assign[self->cl_rows[i]] = self->cl_cols[j];
+        }
+    }
+}
+
+void mvt_trk_associate(mvt_tracker_t *self, int k, int assign[MVT_MAX_TARGETS], uint8_t merged[MVT_MAX_TARGETS])
+{
+    int live[MVT_MAX_TARGETS];
+    int n_live = 0;
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        assign[t] = -1;
+        merged[t] = 0;
+        self->cluster[t] = -1;
+        if (self->tracks[t].id != 0) {
+            live[n_live++] = t;
+        }
+    }
+    hypothesise(self, k, live, n_live);
+
+    /* clusters: tracks linked by a detection inside both gates */
+    const int nd = self->num_meas[k];
+    for (int d = 0; d < nd; d++) {
+        self->det_first[d] = -1;
+    }
+    for (int i = 0; i < n_live; i++) {
+        const int t = live[i];
+        for (int d = 0; d < nd; d++) {
+            if (self->cost[t][d] < MVT_R(0.0)) {
+                continue;
+            }
+            if (self->cluster[t] < 0) {
+                self->cluster[t] = (int16_t)t;
+            }
+            if (self->det_first[d] < 0) {
+                self->det_first[d] = (int16_t)t;
+            } else {
+                const int a = find_root(self->cluster, t), b = find_root(self->cluster, self->det_first[d]);
+                if (a != b) {
+                    self->cluster[a] = (int16_t)b;
+                }
+            }
+        }
+    }
+    for (int i = 0; i < n_live; i++) {
+        const int t = live[i];
+        if (self->cluster[t] >= 0 && find_root(self->cluster, t) == t) {
+            solve_cluster(self, k, t, live, n_live, assign);
+        }
+    }
+
+    /* merged blobs: a track left without a detection takes the one of an unresolved neighbour */
+    if (self->cfg.merge_width_m > MVT_R(0.0)) {
+        int shared[MVT_MAX_TARGETS];
+        for (int i = 0; i < n_live; i++) {
+            const int t = live[i];
+            shared[t] = -1;
+            if (assign[t] >= 0 || self->merge_nb[t] < 0) {
+                continue;
+            }
+            mvt_real best = MVT_R(0.0);
+            for (int j = 0; j < n_live; j++) {
+                const int u = live[j];
+                mvt_real d2;
+                const int d = assign[u];
+                if (u == t || d < 0 || self->cost[t][d] < MVT_R(0.0) ||
+                    !unresolved(self, &self->cams[k], t, u, &d2)) {
+                    continue;
+                }
+                if (shared[t] < 0 || self->cost[t][d] < best) {
+                    shared[t] = d;
+                    best = self->cost[t][d];
+                }
+            }
+        }
+        for (int i = 0; i < n_live; i++) {
+            const int t = live[i];
+            if (shared[t] < 0) {
+                continue;
+            }
+            for (int j = 0; j < n_live; j++) {
+                if (assign[live[j]] == shared[t]) {
+                    merged[live[j]] = 1;
+                }
+            }
+            assign[t] = shared[t];
+            merged[t] = 1;
+        }
+    }
+    for (int i = 0; i < n_live; i++) {
+        if (assign[live[i]] >= 0) {
+            self->used[k][assign[live[i]]] = 1;
+        }
+    }
+}

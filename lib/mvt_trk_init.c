@@ -1,0 +1,278 @@
+/*
+ * mvt_trk_init.c - initiator of the tracker loop: births from detections that no track used.
+ *
+ * For every pair of observed cameras, detection pairs first pass a cheap epipolar test (distance
+ * of one detection to the other's epipolar line, in pixels), then are triangulated, checked
+ * against the volume and each view's reprojection error, and gather support from the nearest
+ * consistent detection of every other view. The best candidates (most views, then least error)
+ * are kept in a bounded list; they are accepted greedily while their detections are still free,
+ * re-triangulated robustly, and refused near an existing track. A ghost (two people's rays that
+ * happen to cross) rarely finds support in a third view and loses its detections to the
+ * better-supported true candidates first; one that survives must still pass M-of-N confirmation.
+ */
+#include <math.h>
+#include <string.h>
+
+#include "mvt_linalg.h"
+#include "mvt_trk.h"
+
+int mvt_trk_inside_volume(const mvt_tracker_config_t *c, const mvt_real x[3])
+{
+    for (int i = 0; i < 3; i++) {
+        if (!(x[i] >= c->volume_min[i] - c->volume_margin_m) || !(x[i] <= c->volume_max[i] + c->volume_margin_m)) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
+static mvt_real birth_threshold(const mvt_tracker_config_t *c, const mvt_pkf_meas_t *m)
+{
+    const mvt_real t = c->birth_reproj_sigma * MVT_SQRT(m->var_px2);
+    return t > c->birth_min_reproj_px ? t : c->birth_min_reproj_px;
+}
+
+static int better(const mvt_birth_cand_t *a, const mvt_birth_cand_t *b)
+{
+    return a->n > b->n || (a->n == b->n && a->err_px < b->err_px);
+}
+
+static void add_candidate(mvt_tracker_t *self, const mvt_birth_cand_t *c)
+{
+    if (self->num_cand < MVT_MAX_BIRTH_CANDIDATES) {
+        self->cand[self->num_cand++] = *c;
+        return;
+    }
+    int worst = 0;
+    for (int i = 1; i < self->num_cand; i++) {
+        if (better(&self->cand[worst], &self->cand[i])) {
+            worst = i;
+        }
+    }
+    self->counters.birth_candidates_dropped++;
+    if (better(c, &self->cand[worst])) {
+        self->cand[worst] = *c;
+    }
+}
+
+/* Essential matrix of the pair: x_b^T E x_a = 0 in normalised coordinates. */
+static void essential(const mvt_camera_t *a, const mvt_camera_t *b, mvt_real E[9])
+{
+    mvt_real R[9], t[3];
+    for (int i = 0; i < 3; i++) { /* R = Rb Ra^T, t = tb - R ta */
+        for (int j = 0; j < 3; j++) {
+            R[i * 3 + j] = b->R[i * 3 + 0] * a->R[j * 3 + 0] + b->R[i * 3 + 1] * a->R[j * 3 + 1] +
+                           b->R[i * 3 + 2] * a->R[j * 3 + 2];
+        }
+    }
+    for (int i = 0; i < 3; i++) {
+        t[i] = b->t[i] - (R[i * 3 + 0] * a->t[0] + R[i * 3 + 1] * a->t[1] + R[i * 3 + 2] * a->t[2]);
+    }
+    for (int j = 0; j < 3; j++) { /* E = [t]x R */
+        E[0 * 3 + j] = t[1] * R[2 * 3 + j] - t[2] * R[1 * 3 + j];
+        E[1 * 3 + j] = t[2] * R[0 * 3 + j] - t[0] * R[2 * 3 + j];
+        E[2 * 3 + j] = t[0] * R[1 * 3 + j] - t[1] * R[0 * 3 + j];
+    }
+}
+
+static int free_meas(const mvt_tracker_t *self, int k, int d)
+{
+    return self->meas_ok[k][d] && !self->used[k][d];
+}
+
+/* Support of point x from the other observed views: the nearest free consistent detection each. */
+static void gather_support(const mvt_tracker_t *self, const int order[], int n_order, int a, int b,
+                           const mvt_real x[3], mvt_birth_cand_t *cand)
+{
+    const mvt_tracker_config_t *c = &self->cfg;
+    for (int oi = 0; oi < n_order; oi++) {
+        const int k = order[oi];
+        if (k == a || k == b) {
+            continue;
+        }
+        const mvt_camera_t *cam = &self->cams[k];
+        mvt_real xc[3];
+        mvt_cam_to_camera(cam, x, xc);
+        if (!(xc[2] > MVT_R(1e-2))) {
+            continue;
+        }
+        const mvt_real pu = xc[0] / xc[2], pv = xc[1] / xc[2];
+        int bd = -1;
+        mvt_real be = MVT_R(0.0);
+        for (int d = 0; d < self->num_meas[k]; d++) {
+            if (!free_meas(self, k, d)) {
+                continue;
+            }
+            const mvt_pkf_meas_t *m = &self->meas[k][d];
+            const mvt_real eu = cam->fx * (m->xn[0] - pu), ev = cam->fy * (m->xn[1] - pv);
+            const mvt_real e = MVT_SQRT(eu * eu + ev * ev);
+            if (e <= birth_threshold(c, m) && (bd < 0 || e < be)) {
+                bd = d;
+                be = e;
+            }
+        }
+        if (bd >= 0) {
+            cand->cam[cand->n] = (int16_t)k;
+            cand->det[cand->n] = (int16_t)bd;
+            cand->err_px += be;
+            cand->n++;
+        }
+    }
+}
+
+static void collect_candidates(mvt_tracker_t *self, const int order[], int n_order)
+{
+    const mvt_tracker_config_t *c = &self->cfg;
+    self->num_cand = 0;
+    for (int ai = 0; ai < n_order; ai++) {
+        const int a = order[ai];
+        for (int bi = ai + 1; bi < n_order; bi++) {
+            const int b = order[bi];
+            const mvt_camera_t *cb = &self->cams[b];
+            mvt_real E[9];
+            essential(&self->cams[a], cb, E);
+            for (int i = 0; i < self->num_meas[a]; i++) {
+                if (!free_meas(self, a, i)) {
+                    continue;
+                }
+                const mvt_pkf_meas_t *ma = &self->meas[a][i];
+                mvt_real l[3];
+                for (int r = 0; r < 3; r++) {
+                    l[r] = E[r * 3 + 0] * ma->xn[0] + E[r * 3 + 1] * ma->xn[1] + E[r * 3 + 2];
+                }
+                const mvt_real ln = MVT_SQRT(l[0] * l[0] + l[1] * l[1]);
+                if (!(ln > MVT_R(1e-9))) {
+                    continue; /* the detection is at the epipole: no line */
+                }
+                const mvt_real fb = cb->fx > cb->fy ? cb->fx : cb->fy;
+                for (int j = 0; j < self->num_meas[b]; j++) {
+                    if (!free_meas(self, b, j)) {
+                        continue;
+                    }
+                    const mvt_pkf_meas_t *mb = &self->meas[b][j];
+                    const mvt_real epi_px = MVT_FABS(l[0] * mb->xn[0] + l[1] * mb->xn[1] + l[2]) / ln * fb;
+                    if (epi_px > birth_threshold(c, ma) + birth_threshold(c, mb)) {
+                        continue;
+                    }
+                    const mvt_tri_obs_t pair[2] = {{a, {ma->xn[0], ma->xn[1]}, ma->var_px2},
+                                                   {b, {mb->xn[0], mb->xn[1]}, mb->var_px2}};
+                    mvt_real x[3];
+                    if (mvt_tri_linear(self->cams, pair, 2, x) != MVT_OK || !mvt_trk_inside_volume(c, x)) {
+                        continue;
+                    }
+                    const mvt_real ea = mvt_tri_reproj_px(self->cams, &pair[0], x);
+                    const mvt_real eb = mvt_tri_reproj_px(self->cams, &pair[1], x);
+                    if (ea > birth_threshold(c, ma) || eb > birth_threshold(c, mb)) {
+                        continue;
+                    }
+                    mvt_birth_cand_t cand;
+                    cand.n = 2;
+                    cand.cam[0] = (int16_t)a;
+                    cand.det[0] = (int16_t)i;
+                    cand.cam[1] = (int16_t)b;
+                    cand.det[1] = (int16_t)j;
+                    cand.err_px = ea + eb;
+                    gather_support(self, order, n_order, a, b, x, &cand);
+                    if (cand.n >= c->birth_min_views) {
+                        add_candidate(self, &cand);
+                    }
+                }
+            }
+        }
+    }
+}
+
+static int near_existing_track(const mvt_tracker_t *self, const mvt_real x[3])
+{
+    const mvt_real r2 = self->cfg.birth_min_sep_m * self->cfg.birth_min_sep_m;
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        const mvt_track_t *tr = &self->tracks[t];
+        if (tr->id == 0) {
+            continue;
+        }
+        const mvt_real dx = tr->s.x[0] - x[0], dy = tr->s.x[1] - x[1], dz = tr->s.x[2] - x[2];
+        if (dx * dx + dy * dy + dz * dz < r2) {
+            return 1;
+        }
+    }
+    return 0;
+}
+
+static void birth(mvt_tracker_t *self, const mvt_frame_t *frame, const mvt_birth_cand_t *cand)
+{
+    const mvt_tracker_config_t *c = &self->cfg;
+    mvt_tri_obs_t obs[MVT_MAX_CAMERAS];
+    for (int i = 0; i < cand->n; i++) {
+        const mvt_pkf_meas_t *m = &self->meas[cand->cam[i]][cand->det[i]];
+        obs[i] = (mvt_tri_obs_t){cand->cam[i], {m->xn[0], m->xn[1]}, m->var_px2};
+        self->used[cand->cam[i]][cand->det[i]] = 1; /* consumed whatever happens next */
+    }
+    mvt_real x[3], cov[9];
+    uint32_t inl = 0;
+    int m = 0;
+    const mvt_real thr = birth_threshold(c, &self->meas[cand->cam[0]][cand->det[0]]);
+    if (mvt_tri_robust(self->cams, obs, cand->n, thr, x, &inl, &m) != MVT_OK || m < c->birth_min_views ||
+        !mvt_trk_inside_volume(c, x) || near_existing_track(self, x)) {
+        return;
+    }
+    mvt_tri_obs_t in[MVT_MAX_CAMERAS];
+    uint32_t bits = 0;
+    int mi = 0;
+    for (int i = 0; i < cand->n; i++) {
+        if (inl & (1u << i)) {
+            in[mi++] = obs[i];
+            bits |= 1u << obs[i].cam;
+        }
+    }
+    if (mvt_tri_covariance(self->cams, in, mi, x, cov) != MVT_OK) {
+        return;
+    }
+    int slot = -1;
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        if (self->tracks[t].id == 0) {
+            slot = t;
+            break;
+        }
+    }
+    if (slot < 0) {
+        self->counters.births_refused_full++;
+        return;
+    }
+    mvt_track_t *tr = &self->tracks[slot];
+    memset(tr, 0, sizeof(*tr));
+    tr->id = self->next_id++;
+    if (self->next_id <= 0) { /* 2^31 births: wrap to 1 rather than reuse 0 or go negative */
+        self->next_id = 1;
+    }
+    tr->status = c->confirm_hits <= 1 ? MVT_TRACK_CONFIRMED : MVT_TRACK_TENTATIVE;
+    mvt_cv_init(&tr->s, x, cov, c->init_vel_std_ms * c->init_vel_std_ms, frame->utime_us);
+    tr->cameras_used = bits;
+    tr->hit_history = 1u;
+    tr->last_update_us = frame->utime_us;
+    self->counters.births++;
+}
+
+void mvt_trk_initiate(mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order)
+{
+    collect_candidates(self, order, n_order);
+    /* best first (insertion sort: stable, bounded by MVT_MAX_BIRTH_CANDIDATES) */
+    for (int i = 1; i < self->num_cand; i++) {
+        const mvt_birth_cand_t key = self->cand[i];
+        int j = i - 1;
+        while (j >= 0 && better(&key, &self->cand[j])) {
+            self->cand[j + 1] = self->cand[j];
+            j--;
+        }
+        self->cand[j + 1] = key;
+    }
+    for (int i = 0; i < self->num_cand; i++) {
+        const mvt_birth_cand_t *cand = &self->cand[i];
+        int free_all = 1;
+        for (int v = 0; v < cand->n && free_all; v++) {
+            free_all = !self->used[cand->cam[v]][cand->det[v]];
+        }
+        if (free_all) {
+            birth(self, frame, cand);
+        }
+    }
+}
