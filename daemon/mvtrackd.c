@@ -28,6 +28,8 @@
 
 #define DEFAULT_URL "udpm://239.255.76.67:7667?ttl=0"
 #define PROC_RING 512
+/* Detections of one message examined before the core chooses MVT_MAX_DETECTIONS of them. */
+#define MVTD_MAX_INPUT_DETECTIONS 4096
 
 enum log_class { LOG_UNDECODABLE, LOG_UNKNOWN_CAMERA, LOG_BAD_VALUE, LOG_CAPACITY, LOG_TIME, LOG_TRACKER, LOG_NCLASS };
 
@@ -58,6 +60,7 @@ typedef struct daemon_state {
     int64_t log_suppressed[LOG_NCLASS];
     uint64_t tracker_births_full_seen;
     mvt_view_t scratch_view;
+    mvt_detection_t input_dets[MVTD_MAX_INPUT_DETECTIONS];
 } daemon_state_t;
 
 static volatile sig_atomic_t g_stop = 0;
@@ -175,6 +178,19 @@ static void publish_status(daemon_state_t *d)
         }
     }
     st.tracks_dropped_capacity = (int64_t)d->tracker.counters.births_refused_full;
+    const mvt_counters_t *c = &d->tracker.counters;
+    st.births = (int64_t)c->births;
+    st.deleted_tentative = (int64_t)c->deleted_tentative;
+    st.deleted_unseen = (int64_t)c->deleted_unseen;
+    st.deleted_exit = (int64_t)c->deleted_exit;
+    st.deleted_uncertain = (int64_t)c->deleted_uncertain;
+    st.deleted_outside = (int64_t)c->deleted_outside;
+    st.deleted_duplicate = (int64_t)c->duplicates_deleted;
+    st.updates = (int64_t)c->updates;
+    st.updates_merged_withheld = (int64_t)c->merged_ambiguous;
+    st.updates_merged_shared = (int64_t)c->merged_updates;
+    st.birth_candidates_dropped = (int64_t)c->birth_candidates_dropped;
+    st.numeric_faults = (int64_t)c->numeric_faults;
     mvtrack_status_t_publish(d->lcm_out, "MVTRACK_STATUS", &st);
     d->last_status_wall_s = now;
 }
@@ -228,29 +244,6 @@ static void on_frame(void *ctx, mvt_frame_t *frame, int complete)
     }
 }
 
-/* Keeps the MVT_MAX_DETECTIONS highest-score detections when a message has more. */
-static int keep_best(const mvtrack_camera_frame_t *m, int idx[MVT_MAX_DETECTIONS])
-{
-    int n = 0;
-    for (int i = 0; i < m->num_detections; i++) {
-        const float s = m->detections[i].score;
-        if (n < MVT_MAX_DETECTIONS) {
-            idx[n++] = i;
-            continue;
-        }
-        int worst = 0;
-        for (int j = 1; j < n; j++) {
-            if (m->detections[idx[j]].score < m->detections[idx[worst]].score) {
-                worst = j;
-            }
-        }
-        if (s > m->detections[idx[worst]].score) {
-            idx[worst] = i;
-        }
-    }
-    return n;
-}
-
 static void on_detections(const lcm_recv_buf_t *rbuf, const char *channel, void *ctx)
 {
     daemon_state_t *d = ctx;
@@ -280,16 +273,12 @@ static void on_detections(const lcm_recv_buf_t *rbuf, const char *channel, void 
     mvt_view_t *v = &d->scratch_view;
     v->observed = 1;
     v->utime_us = m.utime;
-    int idx[MVT_MAX_DETECTIONS];
-    const int n = keep_best(&m, idx);
-    if (m.num_detections > n) {
-        d->rej_over_capacity += m.num_detections - n;
-        log_limited(d, LOG_CAPACITY, "camera %s: %d detections, capacity MVT_MAX_DETECTIONS=%d: lowest scores dropped",
-                    d->rig.names[cam], m.num_detections, MVT_MAX_DETECTIONS);
-    }
-    int kept = 0;
-    for (int i = 0; i < n; i++) {
-        const mvtrack_detection_t *s = &m.detections[idx[i]];
+    /* valid detections first (a flood is cut at MVTD_MAX_INPUT_DETECTIONS, counted), then, over
+     * the core's capacity, the core chooses: each track's nearest gated detection, then scores */
+    mvt_detection_t *in = d->input_dets;
+    int n_in = 0;
+    for (int i = 0; i < m.num_detections; i++) {
+        const mvtrack_detection_t *s = &m.detections[i];
         if (!isfinite(s->u) || !isfinite(s->v) || !isfinite(s->sigma_px) || fabsf(s->u) > 1e6f ||
             fabsf(s->v) > 1e6f) {
             d->rej_bad_value++;
@@ -297,13 +286,29 @@ static void on_detections(const lcm_recv_buf_t *rbuf, const char *channel, void 
                         d->rig.names[cam]);
             continue;
         }
-        mvt_detection_t *o = &v->det[kept++];
+        if (n_in == MVTD_MAX_INPUT_DETECTIONS) {
+            d->rej_over_capacity++;
+            continue;
+        }
+        mvt_detection_t *o = &in[n_in++];
         o->u = (mvt_real)s->u;
         o->v = (mvt_real)s->v;
         o->sigma_px = (mvt_real)s->sigma_px;
         o->score = (mvt_real)s->score;
         o->hue = (mvt_real)s->hue;
         o->saturation = (mvt_real)s->saturation;
+    }
+    int idx[MVT_MAX_DETECTIONS];
+    const int kept = mvt_tracker_select(&d->tracker, cam, in, n_in, idx);
+    if (n_in > kept) {
+        d->rej_over_capacity += n_in - kept;
+        log_limited(d, LOG_CAPACITY,
+                    "camera %s: %d detections, capacity MVT_MAX_DETECTIONS=%d: kept each track's nearest, then the "
+                    "highest scores",
+                    d->rig.names[cam], m.num_detections, MVT_MAX_DETECTIONS);
+    }
+    for (int i = 0; i < kept; i++) {
+        v->det[i] = in[idx[i]];
     }
     v->num_detections = kept;
     mvtrack_camera_frame_t_decode_cleanup(&m);
@@ -364,6 +369,9 @@ static void usage(FILE *f)
             "  --sigma-px X        pixel noise for cameras without sigma_px in the rig (default 2)\n"
             "  --deadline-ms X     live mode: process an incomplete frame set this long after its\n"
             "                      first message (default 20)\n"
+            "  --merge P           a detection inside the gates of two tracks that one camera cannot\n"
+            "                      tell apart (a merged blob): neither (default: update neither),\n"
+            "                      share (update both, covariance widened), off (one-to-one only)\n"
             "  --verbose           print a line per status period\n"
             "  --help              this text\n"
             "\n"
@@ -413,7 +421,7 @@ static daemon_state_t g_state; /* large (the tracker and its workspaces): static
 int main(int argc, char **argv)
 {
     daemon_state_t *d = &g_state;
-    const char *rig_path = NULL, *in_url = DEFAULT_URL, *out_url = NULL, *mode = "pkf", *gate = "chi2";
+    const char *rig_path = NULL, *in_url = DEFAULT_URL, *out_url = NULL, *mode = "pkf", *gate = "chi2", *merge = "neither";
     double sigma_px = 2.0, deadline_ms = 20.0, gate_chi2 = 13.8;
     mvt_real q[3] = {MVT_R(0.5), MVT_R(0.5), MVT_R(0.05)};
     static const struct option opts[] = {
@@ -422,15 +430,17 @@ int main(int argc, char **argv)
         {"gate", required_argument, 0, 'g'},     {"gate-chi2", required_argument, 0, 'c'},
         {"q", required_argument, 0, 'q'},        {"sigma-px", required_argument, 0, 's'},
         {"deadline-ms", required_argument, 0, 'd'}, {"verbose", no_argument, 0, 'v'},
-        {"help", no_argument, 0, 'h'},           {0, 0, 0, 0}};
+        {"merge", required_argument, 0, 'M'},    {"help", no_argument, 0, 'h'},
+        {0, 0, 0, 0}};
     int opt;
-    while ((opt = getopt_long(argc, argv, "r:i:o:m:g:c:q:s:d:vh", opts, NULL)) != -1) {
+    while ((opt = getopt_long(argc, argv, "r:i:o:m:g:c:q:s:d:M:vh", opts, NULL)) != -1) {
         switch (opt) {
         case 'r': rig_path = optarg; break;
         case 'i': in_url = optarg; break;
         case 'o': out_url = optarg; break;
         case 'm': mode = optarg; break;
         case 'g': gate = optarg; break;
+        case 'M': merge = optarg; break;
         case 'c':
             if (option_pos("--gate-chi2", optarg, &gate_chi2) != 0) {
                 return 2;
@@ -487,6 +497,16 @@ int main(int argc, char **argv)
         cfg.gate = MVT_GATE_PAPER;
     } else {
         fprintf(stderr, "mvtrackd: unknown --gate '%s' (chi2, paper)\n", gate);
+        return 2;
+    }
+    if (strcmp(merge, "neither") == 0) {
+        cfg.merge = MVT_MERGE_NEITHER;
+    } else if (strcmp(merge, "share") == 0) {
+        cfg.merge = MVT_MERGE_SHARE;
+    } else if (strcmp(merge, "off") == 0) {
+        cfg.merge = MVT_MERGE_OFF;
+    } else {
+        fprintf(stderr, "mvtrackd: unknown --merge '%s' (neither, share, off)\n", merge);
         return 2;
     }
     cfg.gate_chi2 = (mvt_real)gate_chi2;

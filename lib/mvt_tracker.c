@@ -34,6 +34,8 @@ void mvt_tracker_config_default(mvt_tracker_config_t *c)
     c->birth_min_views = 2;
     c->birth_min_sep_m = MVT_R(0.4);
     c->init_vel_std_ms = MVT_R(1.0);
+    c->seen_min_views = 2;
+    c->seen_max_std_m = MVT_R(0.25);
     c->confirm_hits = 3;
     c->confirm_window = 5;
     c->tentative_max_misses = 2;
@@ -41,7 +43,12 @@ void mvt_tracker_config_default(mvt_tracker_config_t *c)
     c->max_pos_std_m = MVT_R(1.0);
     c->volume_margin_m = MVT_R(0.5);
     c->var_floor_m2 = MVT_R(1e-10);
+    c->merge = MVT_MERGE_NEITHER;
     c->merge_width_m = MVT_R(0.5);
+    c->merge_ambiguity = MVT_R(4.0);
+    c->dup_dist_m = MVT_R(0.25);
+    c->exit_margin_m = MVT_R(0.5);
+    c->exit_coast_s = MVT_R(0.3);
 }
 
 static int config_ok(const mvt_tracker_config_t *c)
@@ -55,10 +62,15 @@ static int config_ok(const mvt_tracker_config_t *c)
     return c->gate_chi2 > MVT_R(0.0) && c->paper_gamma > MVT_R(0.0) && c->paper_delta > MVT_R(0.0) &&
            c->birth_reproj_sigma > MVT_R(0.0) && c->birth_min_reproj_px >= MVT_R(0.0) && c->birth_min_views >= 2 &&
            c->birth_min_sep_m >= MVT_R(0.0) && c->init_vel_std_ms > MVT_R(0.0) && c->confirm_window >= 1 &&
+           c->seen_min_views >= 1 && c->seen_max_std_m >= MVT_R(0.0) && isfinite(c->seen_max_std_m) &&
            c->confirm_window <= 32 && c->confirm_hits >= 1 && c->confirm_hits <= c->confirm_window &&
            c->tentative_max_misses >= 1 && c->coast_max_s > MVT_R(0.0) && c->max_pos_std_m > MVT_R(0.0) &&
            c->volume_margin_m >= MVT_R(0.0) && c->var_floor_m2 >= MVT_R(0.0) &&
-           c->merge_width_m >= MVT_R(0.0) && isfinite(c->merge_width_m) &&
+           c->merge_width_m > MVT_R(0.0) && isfinite(c->merge_width_m) && c->dup_dist_m >= MVT_R(0.0) &&
+           c->merge_ambiguity >= MVT_R(0.0) && isfinite(c->merge_ambiguity) &&
+           isfinite(c->dup_dist_m) && c->exit_margin_m >= MVT_R(0.0) && isfinite(c->exit_margin_m) &&
+           c->exit_coast_s > MVT_R(0.0) && isfinite(c->exit_coast_s) &&
+           (c->merge == MVT_MERGE_NEITHER || c->merge == MVT_MERGE_SHARE || c->merge == MVT_MERGE_OFF) &&
            (c->filter == MVT_FILTER_PROJECTIVE || c->filter == MVT_FILTER_TRIANGULATE) &&
            (c->gate == MVT_GATE_CHI2 || c->gate == MVT_GATE_PAPER) &&
            (c->lin == MVT_PKF_JACOBIAN || c->lin == MVT_PKF_PAPER || c->lin == MVT_PKF_PAPER_CENTRED);
@@ -136,7 +148,8 @@ static void step_projective(mvt_tracker_t *self, const mvt_frame_t *frame, const
                 continue;
             }
             mvt_pkf_innov_t in;
-            const mvt_real *extra = self->merge_nb[t] >= 0 ? self->merge_cov[t] : NULL;
+            const mvt_real *extra =
+                c->merge == MVT_MERGE_SHARE && self->merge_nb[t] >= 0 ? self->merge_cov[t] : NULL;
             mvt_err_t err = mvt_pkf_innovation_from(&self->pred[t], &self->meas[k][assign[t]], extra, &in);
             if (err == MVT_OK) {
                 err = mvt_pkf_update(&tr->s, &in);

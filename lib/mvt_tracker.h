@@ -40,6 +40,15 @@ typedef enum mvt_filter {
     MVT_FILTER_TRIANGULATE = 1
 } mvt_filter_t;
 
+typedef enum mvt_merge {
+    MVT_MERGE_NEITHER = 0, /* a detection inside the gates of two tracks that are unresolved in its
+                              view updates neither when it is ambiguous (merge_ambiguity): the
+                              other views decide */
+    MVT_MERGE_SHARE = 1,   /* ... updates both, its covariance widened by D D^T / 3 (D: the image
+                              separation of the two predictions) */
+    MVT_MERGE_OFF = 2      /* strict one-to-one assignment, no merged-blob handling */
+} mvt_merge_t;
+
 typedef enum mvt_gate {
     MVT_GATE_CHI2 = 0,  /* innovation y^T S^-1 y <= gate_chi2 (2 dof per camera) */
     MVT_GATE_PAPER = 1  /* Eq. 22-26: distance to the projected ellipsoid <= paper_delta */
@@ -64,7 +73,13 @@ typedef struct mvt_tracker_config {
     int birth_min_views;        /* views that must agree for a birth, >= 2; default 2 */
     mvt_real birth_min_sep_m;   /* no birth closer than this to an existing track; default 0.4 */
     mvt_real init_vel_std_ms;   /* velocity std of a new track, m/s; default 1.0 */
-    int confirm_hits;           /* M of the last confirm_window frames updated -> confirmed; 3 */
+    int seen_min_views;         /* a frame "sees" a track (a hit for confirmation; keeps it alive)
+                                   when at least this many cameras updated it (capped at the rig's
+                                   camera count), or one camera did and its position std is still
+                                   below seen_max_std_m on every axis: a lost track fed by one
+                                   camera's clutter must not live on; >= 1, default 2 */
+    mvt_real seen_max_std_m;    /* >= 0, default 0.25 */
+    int confirm_hits;           /* M of the last confirm_window frames seen -> confirmed; 3 */
     int confirm_window;         /* N, 1..32; default 5 */
     int tentative_max_misses;   /* consecutive misses that delete a tentative track; default 2 */
     mvt_real coast_max_s;       /* a confirmed track unseen this long is deleted; default 1.0 */
@@ -73,11 +88,19 @@ typedef struct mvt_tracker_config {
     mvt_real volume_max[3];
     mvt_real volume_margin_m;   /* births and tracks may be this far outside; default 0.5 */
     mvt_real var_floor_m2;      /* covariance diagonal floor; default 1e-10 */
-    mvt_real merge_width_m;     /* merged blobs: two tracks whose predicted image points in a view
-                                   are closer than this width seen at their depth are unresolved
-                                   there, and one detection may update both, with its covariance
-                                   widened along their separation; 0 disables (strict one-to-one);
+    mvt_merge_t merge;          /* merged blobs (see mvt_merge_t); default MVT_MERGE_NEITHER */
+    mvt_real merge_width_m;     /* two tracks whose predicted image points in a view are closer
+                                   than this width seen at their depth are unresolved there; > 0,
                                    default 0.5 */
+    mvt_real merge_ambiguity;   /* MVT_MERGE_NEITHER: a merged detection whose -2 log-likelihoods
+                                   for the two tracks differ by less than this is ambiguous and
+                                   updates neither; >= 0, default 4 (likelihood ratio e^2) */
+    mvt_real dup_dist_m;        /* two tracks closer than this in 3D are one target: the younger
+                                   is deleted; >= 0 (0: never), default 0.25 */
+    mvt_real exit_margin_m;     /* a track unseen for exit_coast_s within this distance of the
+                                   volume's side walls is deleted (people leave through the sides);
+                                   >= 0, default 0.5 */
+    mvt_real exit_coast_s;      /* > 0, default 0.3 */
 } mvt_tracker_config_t;
 
 /* One detection as the core needs it (raw distorted pixels). */
@@ -133,8 +156,17 @@ typedef struct mvt_counters {
     uint64_t numeric_faults;          /* covariance repaired or track dropped as non-PD */
     uint64_t births;
     uint64_t births_refused_full;     /* MVT_MAX_TARGETS reached */
-    uint64_t deletions;
-    uint64_t merged_updates;          /* updates from a detection shared by unresolved tracks */
+    uint64_t deletions;               /* all deletions; by reason: */
+    uint64_t deleted_tentative;       /*   tentative track missed tentative_max_misses frames */
+    uint64_t deleted_unseen;          /*   confirmed track unseen for coast_max_s */
+    uint64_t deleted_exit;            /*   unseen for exit_coast_s near a side wall */
+    uint64_t deleted_uncertain;       /*   position std above max_pos_std_m */
+    uint64_t deleted_outside;         /*   left the volume (plus margin) */
+    uint64_t merged_updates;          /* MVT_MERGE_SHARE: updates from a detection shared by
+                                         unresolved tracks */
+    uint64_t merged_ambiguous;        /* MVT_MERGE_NEITHER: track-camera updates withheld because
+                                         the detection was inside an unresolved neighbour's gate */
+    uint64_t duplicates_deleted;      /* tracks deleted as duplicates (dup_dist_m) */
     uint64_t birth_candidates_dropped;/* multi-view birth candidates beyond MVT_MAX_BIRTH_CANDIDATES */
 } mvt_counters_t;
 
@@ -144,8 +176,8 @@ typedef struct mvt_track {
     mvt_cv_state_t s;
     uint32_t cameras_used;      /* this frame */
     uint32_t hit_history;       /* bit 0: this frame had an update, bit 1: previous, ... */
-    int32_t misses;             /* consecutive frames without update */
-    int64_t last_update_us;
+    int32_t misses;             /* consecutive frames not seen (seen_min_views) */
+    int64_t last_update_us;     /* last frame seen */
 } mvt_track_t;
 
 /* Multi-view birth candidates examined per frame (the best are kept; the excess is counted). */

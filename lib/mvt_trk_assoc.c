@@ -5,11 +5,16 @@
  * against every detection. Association: global nearest neighbour by the Hungarian method on each
  * cluster of tracks linked through shared gated detections, with a "missed" column per track at
  * the gate's cost, so one detection feeds at most one track. Merged blobs: tracks whose image
- * points are closer than merge_width_m seen at their depth are unresolved in this view; their
- * measurement covariance is widened by D D^T / 3 (D = the image separation to the nearest
- * unresolved track: a uniform offset of up to |D| toward it has second moment |D|^2 / 3), and a
- * track left without a detection may share the one assigned to an unresolved neighbour if it
- * passes its own (widened) gate. docs/tracking.md measures the alternatives.
+ * points are closer than merge_width_m seen at their depth are unresolved in this view. When the
+ * Hungarian method gives a detection to one of them and leaves an unresolved neighbour without
+ * one although the detection lies in its gate too, the detection may be the two people's merged
+ * blob. MVT_MERGE_NEITHER then updates neither track with it when it is ambiguous (the two
+ * tracks' likelihoods differ by less than merge_ambiguity in -2 log units; the other views
+ * decide), and leaves it to the assigned track otherwise (a merged region's top is one person's
+ * head, and the Hungarian method already gave it to the likelier one);
+ * MVT_MERGE_SHARE updates both, with the measurement covariance of unresolved tracks widened by
+ * D D^T / 3 (D = the image separation to the nearest unresolved track: a uniform offset of up to
+ * |D| toward it has second moment |D|^2 / 3). docs/tracking.md measures the three policies.
  */
 #include <math.h>
 #include <string.h>
@@ -41,6 +46,24 @@ static int unresolved(const mvt_tracker_t *self, const mvt_camera_t *cam, int t,
     return *d2_px < w * w;
 }
 
+/* -2 log-likelihood of detection d for track t: d^2 + ln |S| (the 2 pi term cancels). */
+static mvt_real neg2_loglik(const mvt_tracker_t *self, int k, int t, int d)
+{
+    mvt_pkf_innov_t in;
+    if (mvt_pkf_innovation_from(&self->pred[t], &self->meas[k][d], NULL, &in) != MVT_OK) {
+        return MVT_R(1e30);
+    }
+    const mvt_real det = in.S[0] * in.S[2] - in.S[1] * in.S[1];
+    return in.d2 + MVT_LOG(det);
+}
+
+/* The detection d given to u could as well be t's: the likelihoods differ by less than
+ * merge_ambiguity in -2 log units. */
+static int ambiguous(const mvt_tracker_t *self, int k, int t, int u, int d)
+{
+    return neg2_loglik(self, k, t, d) - neg2_loglik(self, k, u, d) < self->cfg.merge_ambiguity;
+}
+
 static void hypothesise(mvt_tracker_t *self, int k, const int live[], int n_live)
 {
     const mvt_tracker_config_t *c = &self->cfg;
@@ -58,7 +81,7 @@ static void hypothesise(mvt_tracker_t *self, int k, const int live[], int n_live
             self->counters.numeric_faults++;
         }
     }
-    if (c->merge_width_m > MVT_R(0.0)) {
+    if (c->merge != MVT_MERGE_OFF) {
         mvt_real best[MVT_MAX_TARGETS];
         for (int i = 0; i < n_live; i++) {
             best[live[i]] = MVT_R(0.0);
@@ -101,7 +124,8 @@ static void hypothesise(mvt_tracker_t *self, int k, const int live[], int n_live
             mvt_real cost = MVT_R(-1.0);
             if (self->pred_ok[t] && self->meas_ok[k][d] && !self->used[k][d]) {
                 mvt_pkf_innov_t in;
-                const mvt_real *extra = self->merge_nb[t] >= 0 ? self->merge_cov[t] : NULL;
+                const mvt_real *extra =
+                    c->merge == MVT_MERGE_SHARE && self->merge_nb[t] >= 0 ? self->merge_cov[t] : NULL;
                 if (mvt_pkf_innovation_from(&self->pred[t], &self->meas[k][d], extra, &in) == MVT_OK) {
                     if (c->gate == MVT_GATE_PAPER) {
                         mvt_real dist;
@@ -212,8 +236,9 @@ void mvt_trk_associate(mvt_tracker_t *self, int k, int assign[MVT_MAX_TARGETS], 
         }
     }
 
-    /* merged blobs: a track left without a detection takes the one of an unresolved neighbour */
-    if (self->cfg.merge_width_m > MVT_R(0.0)) {
+    /* merged blobs: a track left without a detection whose gate holds the detection of an
+     * unresolved neighbour */
+    if (self->cfg.merge != MVT_MERGE_OFF) {
         int shared[MVT_MAX_TARGETS];
         for (int i = 0; i < n_live; i++) {
             const int t = live[i];
@@ -227,7 +252,8 @@ void mvt_trk_associate(mvt_tracker_t *self, int k, int assign[MVT_MAX_TARGETS], 
                 mvt_real d2;
                 const int d = assign[u];
                 if (u == t || d < 0 || self->cost[t][d] < MVT_R(0.0) ||
-                    !unresolved(self, &self->cams[k], t, u, &d2)) {
+                    !unresolved(self, &self->cams[k], t, u, &d2) ||
+                    (self->cfg.merge == MVT_MERGE_NEITHER && !ambiguous(self, k, t, u, d))) {
                     continue;
                 }
                 if (shared[t] < 0 || self->cost[t][d] < best) {
@@ -241,13 +267,24 @@ void mvt_trk_associate(mvt_tracker_t *self, int k, int assign[MVT_MAX_TARGETS], 
             if (shared[t] < 0) {
                 continue;
             }
+            self->used[k][shared[t]] = 1; /* explained: no birth from it */
             for (int j = 0; j < n_live; j++) {
                 if (assign[live[j]] == shared[t]) {
                     merged[live[j]] = 1;
                 }
             }
-            assign[t] = shared[t];
             merged[t] = 1;
+        }
+        for (int i = 0; i < n_live; i++) {
+            const int t = live[i];
+            if (self->cfg.merge == MVT_MERGE_SHARE) {
+                if (shared[t] >= 0) {
+                    assign[t] = shared[t];
+                }
+            } else if (merged[t]) {
+                self->counters.merged_ambiguous += assign[t] >= 0;
+                assign[t] = -1;
+            }
         }
     }
     for (int i = 0; i < n_live; i++) {

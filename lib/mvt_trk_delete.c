@@ -1,12 +1,19 @@
 /*
  * mvt_trk_delete.c - confirmation and deletion of the tracker loop.
  *
- * A tentative track is confirmed after confirm_hits updated frames among the last confirm_window
+ * A frame "sees" a track when at least seen_min_views cameras updated it, or one did and the
+ * position is still well determined (seen_max_std_m). A tentative track is
+ * confirmed after confirm_hits seen frames among the last confirm_window
  * and deleted after tentative_max_misses consecutive misses. A confirmed track that no camera
  * updated this frame is COASTING; it is deleted once unseen for coast_max_s, when its position
  * standard deviation exceeds max_pos_std_m on any axis, when it leaves the volume (plus margin),
- * or when its covariance cannot be repaired. Identities of deleted tracks are never reused.
+ * or when its covariance cannot be repaired. A track unseen for exit_coast_s near the volume's
+ * side walls is deleted sooner (people leave through the sides). Of two tracks closer than
+ * dup_dist_m in 3D (one person, two tracks), the younger one is deleted. Identities of deleted
+ * tracks are never reused.
  */
+#include <stddef.h>
+
 #include "mvt_trk.h"
 
 static int popcount32(uint32_t x)
@@ -19,16 +26,59 @@ static int popcount32(uint32_t x)
     return n;
 }
 
+static int near_side_wall(const mvt_tracker_config_t *c, const mvt_real x[3])
+{
+    for (int i = 0; i < 2; i++) {
+        if (x[i] < c->volume_min[i] + c->exit_margin_m || x[i] > c->volume_max[i] - c->exit_margin_m) {
+            return 1;
+        }
+    }
+    return 0;
+}
+
+/* Deletes the younger of every pair of live tracks closer than dup_dist_m (confirmed beats
+ * tentative, then the older identity wins). O(T^2). */
+static void delete_duplicates(mvt_tracker_t *self)
+{
+    const mvt_real r2 = self->cfg.dup_dist_m * self->cfg.dup_dist_m;
+    if (!(r2 > MVT_R(0.0))) {
+        return;
+    }
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        mvt_track_t *a = &self->tracks[t];
+        for (int u = t + 1; u < MVT_MAX_TARGETS && a->id != 0; u++) {
+            mvt_track_t *b = &self->tracks[u];
+            if (b->id == 0) {
+                continue;
+            }
+            const mvt_real dx = a->s.x[0] - b->s.x[0], dy = a->s.x[1] - b->s.x[1], dz = a->s.x[2] - b->s.x[2];
+            if (dx * dx + dy * dy + dz * dz >= r2) {
+                continue;
+            }
+            const int a_conf = a->status != MVT_TRACK_TENTATIVE, b_conf = b->status != MVT_TRACK_TENTATIVE;
+            const int drop_a = a_conf != b_conf ? !a_conf : a->id > b->id;
+            mvt_track_t *victim = drop_a ? a : b;
+            victim->id = 0;
+            self->counters.deletions++;
+            self->counters.duplicates_deleted++;
+        }
+    }
+}
+
 void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us)
 {
     const mvt_tracker_config_t *c = &self->cfg;
     const uint32_t window = c->confirm_window >= 32 ? 0xffffffffu : ((1u << c->confirm_window) - 1u);
+    const int min_views = c->seen_min_views < self->num_cameras ? c->seen_min_views : self->num_cameras;
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         mvt_track_t *tr = &self->tracks[t];
         if (tr->id == 0) {
             continue;
         }
-        const int hit = tr->cameras_used != 0u;
+        const int views = popcount32(tr->cameras_used);
+        const mvt_real std2 = c->seen_max_std_m * c->seen_max_std_m;
+        const int hit = views >= min_views || (views >= 1 && tr->s.P[0] <= std2 && tr->s.P[7] <= std2 &&
+                                               tr->s.P[14] <= std2);
         tr->hit_history = (tr->hit_history << 1) | (hit ? 1u : 0u);
         if (hit) {
             tr->misses = 0;
@@ -36,10 +86,10 @@ void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us)
         } else {
             tr->misses++;
         }
-        int drop = 0;
+        uint64_t *reason = NULL; /* the counter of the deletion's reason */
         if (mvt_cv_repair(&tr->s, c->var_floor_m2) != MVT_OK) {
             self->counters.numeric_faults++;
-            drop = 1;
+            reason = &self->counters.numeric_faults;
         }
         const mvt_real *P = tr->s.P;
         const mvt_real var_max = c->max_pos_std_m * c->max_pos_std_m;
@@ -47,28 +97,37 @@ void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us)
         switch (tr->status) {
         case MVT_TRACK_TENTATIVE:
             if (tr->misses >= c->tentative_max_misses) {
-                drop = 1;
+                reason = &self->counters.deleted_tentative;
             } else if (popcount32(tr->hit_history & window) >= c->confirm_hits) {
                 tr->status = MVT_TRACK_CONFIRMED;
             }
             break;
         case MVT_TRACK_CONFIRMED:
         case MVT_TRACK_COASTING:
-            tr->status = hit ? MVT_TRACK_CONFIRMED : MVT_TRACK_COASTING;
+            tr->status = tr->cameras_used != 0u ? MVT_TRACK_CONFIRMED : MVT_TRACK_COASTING;
             if (unseen_s > c->coast_max_s) {
-                drop = 1;
+                reason = &self->counters.deleted_unseen;
+            } else if (unseen_s > c->exit_coast_s && near_side_wall(c, tr->s.x)) {
+                reason = &self->counters.deleted_exit;
             }
             break;
         default:
-            drop = 1;
+            reason = &self->counters.numeric_faults;
             break;
         }
-        if (P[0] > var_max || P[7] > var_max || P[14] > var_max || !mvt_trk_inside_volume(c, tr->s.x)) {
-            drop = 1;
+        if (reason == NULL && (P[0] > var_max || P[7] > var_max || P[14] > var_max)) {
+            reason = &self->counters.deleted_uncertain;
         }
-        if (drop) {
+        if (reason == NULL && !mvt_trk_inside_volume(c, tr->s.x)) {
+            reason = &self->counters.deleted_outside;
+        }
+        if (reason != NULL) {
+            if (reason != &self->counters.numeric_faults) {
+                (*reason)++;
+            }
             tr->id = 0;
             self->counters.deletions++;
         }
     }
+    delete_duplicates(self);
 }

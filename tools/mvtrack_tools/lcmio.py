@@ -13,8 +13,9 @@ from .paths import import_types
 mt = import_types()
 
 
-def camera_frame(utime: int, frame: int, cam, dets: Iterable[tuple[float, float]], sigma_px: float,
+def camera_frame(utime: int, frame: int, cam, dets: Iterable[tuple], sigma_px: float,
                  bbox_half_w: float = 20.0) -> "mt.camera_frame_t":
+    """dets: (u, v) or (u, v, bbox) items; without a bbox a head-topped box is made up."""
     m = mt.camera_frame_t()
     m.utime = int(utime)
     m.frame = int(frame)
@@ -22,11 +23,15 @@ def camera_frame(utime: int, frame: int, cam, dets: Iterable[tuple[float, float]
     m.width = int(cam.width)
     m.height = int(cam.height)
     m.detections = []
-    for u, v in dets:
+    for det in dets:
+        u, v = det[0], det[1]
         d = mt.detection_t()
         d.u, d.v = float(u), float(v)
         d.sigma_px = float(sigma_px)
-        d.bbox = [float(u - bbox_half_w), float(v), float(u + bbox_half_w), float(v + 6 * bbox_half_w)]
+        if len(det) > 2:
+            d.bbox = [float(x) for x in det[2]]
+        else:
+            d.bbox = [float(u - bbox_half_w), float(v), float(u + bbox_half_w), float(v + 6 * bbox_half_w)]
         d.score = 1.0
         d.hue = -1.0
         d.saturation = -1.0

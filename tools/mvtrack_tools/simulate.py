@@ -1,8 +1,16 @@
 """Simulate a scene seen by a camera rig: writes an LCM log (or publishes live at 25 fps) with
 DETECTIONS_<camera> and GROUND_TRUTH, and the rig file.
 
-    python -m mvtrack_tools.simulate exp1 --var 100 --occlusion --seconds 60 --seed 1 \
-        --rig out/rig.yaml --log out/scene.lcm
+Scenes:
+  exp1         the PKF paper's Experiment 1: one person, Gaussian pixel noise, optional occlusions
+  crowd        5 people entering and leaving (2 more enter late), crossing and pausing
+  interaction  the paper's Experiment 2 situation: two people meet, talk close, walk around, 400 frames
+
+crowd and interaction use a detector with misses, false alarms, merged blobs, capture jitter and
+(crowd) one camera dropping out; see the options.
+
+    tools/mvtrack simulate exp1 --var 100 --occlusion --seconds 60 --rig out/rig.yaml --log out/scene.lcm
+    tools/mvtrack simulate crowd --seconds 60 --seed 2 --rig out/rig.yaml --log out/crowd.lcm
 """
 from __future__ import annotations
 
@@ -15,6 +23,7 @@ from tqdm import tqdm
 
 from .lcmio import LivePublisher, LogWriter, camera_frame, ground_truth
 from .rig import Rig, smartroom
+from .crowd import DetectorModel, Scene, crowd_scene, detect, interaction_scene
 from .scenes import Occlusions, WalkModel, head_detections
 
 T0_UTIME = 1_700_000_000_000_000
@@ -45,13 +54,52 @@ def write_scene(sink, rig: Rig, states: np.ndarray, dets, var_px2: float, progre
             sink.write(utime, f"DETECTIONS_{cam.name}", msg)
 
 
+def write_multi(sink, scene: Scene, frames, progress: bool = True) -> None:
+    """Writes a multi-person scene: GROUND_TRUTH at the nominal frame time, each camera's message
+    at its own (jittered) capture time, cameras in random order, nothing from a dropped camera."""
+    rig = scene.rig
+    dt_us = int(round(1e6 / rig.frame_rate))
+    rng = np.random.default_rng(len(frames))
+    for f in tqdm(range(scene.n_frames), desc="frames", unit="fr", disable=not progress, leave=False):
+        utime = T0_UTIME + f * dt_us
+        present = scene.present(f)
+        pos = np.array([p.pos[f - p.f0] for p in present]).reshape(-1, 3)
+        sink.write(utime, "GROUND_TRUTH", ground_truth(utime, f, [p.gid for p in present], pos))
+        for k in rng.permutation(len(rig.cameras)):
+            cf = frames[f][k]
+            if cf is None:
+                continue
+            cam = rig.cameras[k]
+            msg = camera_frame(utime + cf.utime_offset_us, f, cam, [(u, v, box) for (u, v, box, _) in cf.dets],
+                               scene.model.sigma_px)
+            sink.write(utime + cf.utime_offset_us, f"DETECTIONS_{cam.name}", msg)
+
+
+def build_multi(kind: str, rig: Rig, seed: int, seconds: float | None = None, frames: int | None = None,
+                model: DetectorModel | None = None):
+    """A crowd or interaction scene and its per-camera detections."""
+    if kind == "crowd":
+        scene = crowd_scene(rig, seconds or 60.0, seed, model=model)
+    else:
+        scene = interaction_scene(rig, frames or 400, seed, model=model)
+    return scene, detect(scene, np.random.default_rng(seed + 7919))
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="mvtrack simulate", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("scene", choices=["exp1"], help="exp1: the PKF paper's Experiment 1 (one person)")
-    ap.add_argument("--var", type=float, default=100.0, help="pixel noise variance sigma^2, px^2 (default 100)")
-    ap.add_argument("--occlusion", action="store_true", help="add the paper's occlusion bursts (10 frames, P=0.3)")
-    ap.add_argument("--seconds", type=float, default=60.0, help="scene length (default 60)")
+    ap.add_argument("scene", choices=["exp1", "crowd", "interaction"])
+    ap.add_argument("--var", type=float, default=100.0, help="exp1: pixel noise variance sigma^2, px^2 (default 100)")
+    ap.add_argument("--occlusion", action="store_true", help="exp1: add the paper's occlusion bursts (10 frames, P=0.3)")
+    ap.add_argument("--seconds", type=float, default=60.0, help="exp1, crowd: scene length (default 60)")
+    ap.add_argument("--frames", type=int, default=400, help="interaction: frames (default 400)")
+    ap.add_argument("--sigma", type=float, default=4.0, help="crowd, interaction: pixel noise sigma (default 4)")
+    ap.add_argument("--miss", type=float, default=0.10, help="crowd, interaction: miss probability (default 0.1)")
+    ap.add_argument("--fa", type=float, default=0.3, help="crowd, interaction: false alarms per camera per frame (0.3)")
+    ap.add_argument("--no-merge", action="store_true", help="crowd, interaction: never merge touching blobs")
+    ap.add_argument("--jitter-ms", type=float, default=3.0, help="crowd, interaction: capture jitter, +-ms (default 3)")
+    ap.add_argument("--dropout-cam", type=int, default=1, help="crowd: camera that drops out (-1: none; default 1)")
+    ap.add_argument("--dropout-s", type=float, default=20.0, help="crowd: dropout start (default 20 s), lasting 4 s")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--rig", type=Path, required=True, help="rig file to write (CONTRACT section 2)")
     ap.add_argument("--log", type=Path, help="LCM log to write")
@@ -60,19 +108,30 @@ def main(argv: list[str] | None = None) -> int:
     a = ap.parse_args(argv)
     if (a.log is None) == (a.live is None):
         ap.error("give exactly one of --log and --live")
-    if a.var <= 0 or a.seconds <= 0:
-        ap.error("--var and --seconds must be positive")
+    if a.var <= 0 or a.seconds <= 0 or a.frames <= 0 or a.sigma <= 0 or not 0 <= a.miss < 1 or a.fa < 0 \
+            or a.jitter_ms < 0:
+        ap.error("--var, --seconds, --frames, --sigma must be positive; --miss in [0, 1); --fa, --jitter-ms >= 0")
     rig = smartroom()
     a.rig.parent.mkdir(parents=True, exist_ok=True)
     rig.write(a.rig)
-    _, states, dets = experiment1(rig, a.seconds, a.var, a.occlusion, a.seed)
     if a.log is not None:
         a.log.parent.mkdir(parents=True, exist_ok=True)
         sink = LogWriter(str(a.log))
     else:
         sink = LivePublisher(a.live)
     try:
-        write_scene(sink, rig, states, dets, a.var, progress=not a.quiet)
+        if a.scene == "exp1":
+            _, states, dets = experiment1(rig, a.seconds, a.var, a.occlusion, a.seed)
+            write_scene(sink, rig, states, dets, a.var, progress=not a.quiet)
+        else:
+            model = DetectorModel(a.sigma, a.miss, a.fa, not a.no_merge, a.jitter_ms,
+                                  None if a.dropout_cam < 0 or a.scene == "interaction" else a.dropout_cam,
+                                  a.dropout_s, 4.0)
+            scene, frames = build_multi(a.scene, rig, a.seed, a.seconds, a.frames, model)
+            write_multi(sink, scene, frames, progress=not a.quiet)
+            if not a.quiet:
+                print(f"{a.scene}: {len(scene.people)} people, {scene.n_frames} frames; detector: "
+                      + ", ".join(f"{k} {v}" for k, v in scene.info.items()), file=sys.stderr)
     except KeyboardInterrupt:
         pass
     finally:
