@@ -35,11 +35,11 @@ void mvt_tracker_config_default(mvt_tracker_config_t *c)
     c->birth_min_sep_m = MVT_R(0.4);
     c->init_vel_std_ms = MVT_R(1.0);
     c->seen_min_views = 2;
-    c->seen_max_std_m = MVT_R(0.25);
+    c->seen_max_std_m = MVT_R(0.0);
     c->confirm_hits = 3;
     c->confirm_window = 5;
     c->tentative_max_misses = 2;
-    c->coast_max_s = MVT_R(1.0);
+    c->coast_max_s = MVT_R(2.0);
     c->max_pos_std_m = MVT_R(1.0);
     c->volume_margin_m = MVT_R(0.5);
     c->var_floor_m2 = MVT_R(1e-10);

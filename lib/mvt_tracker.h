@@ -78,7 +78,8 @@ typedef struct mvt_tracker_config {
                                    camera count), or one camera did and its position std is still
                                    below seen_max_std_m on every axis: a lost track fed by one
                                    camera's clutter must not live on; >= 1, default 2 */
-    mvt_real seen_max_std_m;    /* >= 0, default 0.25 */
+    mvt_real seen_max_std_m;    /* >= 0, default 0 (off: one view can drag a track along its ray
+                                   while the std across the ray stays small) */
     int confirm_hits;           /* M of the last confirm_window frames seen -> confirmed; 3 */
     int confirm_window;         /* N, 1..32; default 5 */
     int tentative_max_misses;   /* consecutive misses that delete a tentative track; default 2 */

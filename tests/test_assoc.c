@@ -1,0 +1,123 @@
+/* Unit tests of mvt_assoc: the Hungarian solver against exhaustive enumeration. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+#include <math.h>
+
+#include "mvt_assoc.h"
+#include "test_support.h"
+
+static mvt_assoc_ws_t g_ws;
+
+/* Minimum over all injective row -> column maps (forbidden entries < 0 may be skipped: the row
+ * stays unassigned at cost `forbid_penalty`), by recursion over rows. */
+static double brute(const mvt_real *c, int nr, int nc, int r, unsigned used, double penalty)
+{
+    if (r == nr) {
+        return 0.0;
+    }
+    double best = penalty + brute(c, nr, nc, r + 1, used, penalty); /* row r unassigned */
+    for (int j = 0; j < nc; j++) {
+        const mvt_real x = c[r * nc + j];
+        if ((used & (1u << j)) || x < 0) {
+            continue;
+        }
+        const double v = x + brute(c, nr, nc, r + 1, used | (1u << j), penalty);
+        if (v < best) {
+            best = v;
+        }
+    }
+    return best;
+}
+
+static void test_mvt_assoc_solve_random_matrices_match_brute_force(void **state)
+{
+    (void)state;
+    test_rng_t rng = {12345};
+    for (int trial = 0; trial < 400; trial++) {
+        const int nr = 1 + (int)(test_uniform(&rng) * 5);
+        const int nc = nr + (int)(test_uniform(&rng) * 4);
+        mvt_real c[6 * 9];
+        for (int i = 0; i < nr * nc; i++) {
+            c[i] = test_uniform(&rng) < 0.3 ? -1.0f : (mvt_real)(test_uniform(&rng) * 20.0);
+        }
+        int a[6];
+        assert_int_equal(mvt_assoc_solve(c, nr, nc, nc, a, &g_ws), MVT_OK);
+        /* the solver's choice: distinct feasible columns; its cost equals the exhaustive optimum
+         * among assignments that leave the fewest rows unassigned */
+        double cost = 0.0;
+        int unassigned = 0;
+        unsigned used = 0;
+        for (int r = 0; r < nr; r++) {
+            if (a[r] < 0) {
+                unassigned++;
+                continue;
+            }
+            assert_true(a[r] < nc);
+            assert_false(used & (1u << a[r]));
+            used |= 1u << a[r];
+            assert_true(c[r * nc + a[r]] >= 0.0f);
+            cost += c[r * nc + a[r]];
+        }
+        const double penalty = 1e6; /* makes the brute force maximise the matched rows first */
+        const double ref = brute(c, nr, nc, 0, 0, penalty);
+        assert_float_equal(cost + penalty * unassigned, ref, 1e-3);
+    }
+}
+
+static void test_mvt_assoc_solve_greedy_trap_global_optimum(void **state)
+{
+    (void)state;
+    /* greedy takes (0,0)=1 and then must give row 1 column 1 = 10: total 11; optimum is 2 + 3 */
+    const mvt_real c[4] = {1, 2, 3, 10};
+    int a[2];
+    assert_int_equal(mvt_assoc_solve(c, 2, 2, 2, a, &g_ws), MVT_OK);
+    assert_int_equal(a[0], 1);
+    assert_int_equal(a[1], 0);
+}
+
+static void test_mvt_assoc_solve_bad_sizes_invalid(void **state)
+{
+    (void)state;
+    const mvt_real c[4] = {1, 2, 3, 4};
+    int a[2];
+    assert_int_equal(mvt_assoc_solve(c, 2, 1, 1, a, &g_ws), MVT_ERR_INVALID);
+    assert_int_equal(mvt_assoc_solve(c, 0, 2, 2, a, &g_ws), MVT_ERR_INVALID);
+    assert_int_equal(mvt_assoc_solve(c, 1, 2, 1, a, &g_ws), MVT_ERR_INVALID);
+    assert_int_equal(mvt_assoc_solve(c, MVT_ASSOC_MAX_ROWS + 1, MVT_ASSOC_MAX_COLS, MVT_ASSOC_MAX_COLS, a, &g_ws),
+                     MVT_ERR_INVALID);
+    const mvt_real nan_row[2] = {NAN, INFINITY};
+    assert_int_equal(mvt_assoc_solve(nan_row, 1, 2, 2, a, &g_ws), MVT_OK);
+    assert_int_equal(a[0], -1);
+}
+
+static void test_mvt_assoc_solve_full_capacity_identity(void **state)
+{
+    (void)state;
+    static mvt_real c[MVT_ASSOC_MAX_ROWS * MVT_ASSOC_MAX_COLS];
+    const int nr = MVT_ASSOC_MAX_ROWS, nc = MVT_ASSOC_MAX_COLS;
+    for (int r = 0; r < nr; r++) {
+        for (int j = 0; j < nc; j++) {
+            c[r * nc + j] = (mvt_real)(1 + ((r * 7 + j * 13) % 17)); /* >= 1 everywhere ... */
+        }
+        c[r * nc + (nc - 1 - r)] = 0.0f; /* ... except one zero per row, distinct columns */
+    }
+    static int a[MVT_ASSOC_MAX_ROWS];
+    assert_int_equal(mvt_assoc_solve(c, nr, nc, nc, a, &g_ws), MVT_OK);
+    for (int r = 0; r < nr; r++) {
+        assert_int_equal(a[r], nc - 1 - r);
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_mvt_assoc_solve_random_matrices_match_brute_force),
+        cmocka_unit_test(test_mvt_assoc_solve_greedy_trap_global_optimum),
+        cmocka_unit_test(test_mvt_assoc_solve_bad_sizes_invalid),
+        cmocka_unit_test(test_mvt_assoc_solve_full_capacity_identity),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
