@@ -1,0 +1,176 @@
+"""Many people: the MOT evaluation against hand-made references, the simulator's detector model,
+and mvtrackd on multi-person scenes (our SmartRoom and rigs built differently), floods and dropout."""
+from __future__ import annotations
+
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mvtrack_tools.crowd import DetectorModel, crowd_scene, detect
+from mvtrack_tools.lcmio import LogWriter, TrackLog, camera_frame, ground_truth, read_log
+from mvtrack_tools.mot import clear_mot, ospa, pair_frames
+from mvtrack_tools.rig import random_rig, smartroom
+from mvtrack_tools.simulate import T0_UTIME, build_multi, write_multi
+
+
+class _T:  # a track_t stand-in
+    def __init__(self, i, pos, vel=(0.0, 0.0, 0.0), status=2):
+        self.id, self.position, self.velocity, self.status = i, list(pos), list(vel), status
+
+
+def _logs(gt_frames, trk_frames, dt_us=40000):
+    sc, tr = TrackLog(), TrackLog()
+    for f, (ids, pos) in enumerate(gt_frames):
+        sc.gt[T0_UTIME + f * dt_us] = (ids, np.array(pos, float).reshape(-1, 3))
+    for f, tracks in enumerate(trk_frames):
+        tr.tracks[T0_UTIME + f * dt_us + 2000] = tracks  # 2 ms later, as with capture jitter
+    return sc, tr
+
+
+@pytest.mark.tools
+def test_ospa_matches_hand_computed_values():
+    X = np.array([[0.0, 0, 0], [1, 0, 0]])
+    assert ospa(X, X) == 0.0
+    assert ospa(X[:0], X[:0]) == 0.0
+    assert ospa(X, X[:0]) == pytest.approx(0.5)
+    # one matched 0.1 m away, one missing: ((0.1^2 + 0.5^2) / 2)^(1/2)
+    assert ospa(X, np.array([[0.1, 0, 0]])) == pytest.approx(np.sqrt((0.01 + 0.25) / 2))
+    # distances beyond c are cut at c
+    assert ospa(X[:1], np.array([[3.0, 0, 0]])) == pytest.approx(0.5)
+
+
+@pytest.mark.tools
+def test_clear_mot_motp_in_mm_switches_and_misses():
+    gt = [([1, 2], [[0, 0, 1.7], [2, 0, 1.7]])] * 10
+    # track 10 follows person 1 at 30 mm; person 2 is tracked by 20 then 21 (one switch); one
+    # frame without any track for person 2; a false track far away in the last frame
+    trk = []
+    for f in range(10):
+        t = [_T(10, (0.03, 0, 1.7))]
+        if f != 4:
+            t.append(_T(20 if f < 5 else 21, (2.0, 0.04, 1.7)))
+        if f == 9:
+            t.append(_T(99, (4.0, 4.0, 1.7)))
+        trk.append(t)
+    r = clear_mot(pair_frames(*_logs(gt, trk)))
+    assert r.gt_boxes == 20
+    assert r.misses == 1 and r.false_positives == 1 and r.id_switches == 1
+    assert r.mota == pytest.approx(1 - 3 / 20)
+    assert r.motp_mm == pytest.approx((10 * 30 + 9 * 40) / 19, rel=1e-6)
+
+
+@pytest.mark.tools
+def test_clear_mot_carries_tracks_to_gt_time_and_ignores_tentative():
+    gt = [([1], [[0, 0, 1.7]])] * 3
+    # the track message is 2 ms late; its velocity of 10 m/s carries it back by 20 mm
+    trk = [[_T(1, (0.02, 0, 1.7), (10.0, 0, 0)), _T(2, (0.1, 0, 1.7), status=1)]] * 3
+    r = clear_mot(pair_frames(*_logs(gt, trk)))
+    assert r.false_positives == 0 and r.misses == 0
+    assert r.motp_mm == pytest.approx(0.0, abs=1e-3)
+
+
+@pytest.mark.tools
+def test_detector_model_merges_misses_false_alarms_dropout():
+    rig = smartroom()
+    scene = crowd_scene(rig, 30.0, 5, model=DetectorModel(dropout_s=10.0))
+    frames = detect(scene, np.random.default_rng(1))
+    info = scene.info
+    assert info["merged_blobs"] > 0 and info["missed"] > 0 and info["false_alarms"] > 0
+    # dropout: camera 1 sends nothing for 4 s = 100 frames
+    assert info["dropped_messages"] == 100
+    assert all(frames[f][1] is None for f in range(250, 350))
+    # jitter within +-3 ms
+    offs = [cf.utime_offset_us for row in frames for cf in row if cf is not None]
+    assert max(abs(o) for o in offs) <= 3000 and np.std(offs) > 1000
+    # people never walk through each other
+    for f in range(scene.n_frames):
+        p = np.array([q.pos[f - q.f0, :2] for q in scene.present(f)])
+        if len(p) > 1:
+            d = np.linalg.norm(p[:, None] - p[None], axis=2) + np.eye(len(p)) * 9
+            assert d.min() > 0.4
+
+
+def _run_and_score(daemon: Path, tmp_path: Path, rig, kind: str, seed: int, **kw):
+    rp = tmp_path / f"rig_{kind}_{seed}.yaml"
+    rig.write(rp)
+    scene, frames = build_multi(kind, rig, seed, **kw)
+    log = tmp_path / f"{kind}_{seed}.lcm"
+    w = LogWriter(str(log))
+    write_multi(w, scene, frames, progress=False)
+    w.close()
+    out = tmp_path / f"{kind}_{seed}_tracks.lcm"
+    r = subprocess.run([str(daemon), "--rig", str(rp), "--in", f"file://{log}?speed=0", "--out",
+                        f"file://{out}?mode=w"], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    tr = read_log(str(out), lambda c: c in ("TRACKS", "MVTRACK_STATUS"))
+    sc = read_log(str(log), lambda c: c == "GROUND_TRUTH")
+    return clear_mot(pair_frames(sc, tr, rig.frame_rate)), tr, scene
+
+
+@pytest.mark.daemon
+def test_daemon_interaction_scene_no_identity_switch(tmp_path, daemon_path):
+    for seed in (1, 2):
+        r, _, _ = _run_and_score(daemon_path, tmp_path, smartroom(), "interaction", seed)
+        assert r.id_switches == 0, r
+        assert r.mota > 0.97 and r.motp_mm < 40, r
+
+
+@pytest.mark.daemon
+def test_daemon_crowd_scene_with_dropout_keeps_publishing(tmp_path, daemon_path):
+    r, tr, scene = _run_and_score(daemon_path, tmp_path, smartroom(), "crowd", 2, seconds=30.0,
+                                  model=DetectorModel(dropout_s=10.0))
+    # every ground-truth frame has its TRACKS message, also while camera 1 is silent
+    assert r.frames_without_tracks == 0
+    assert len(tr.tracks) == scene.n_frames
+    # measured on this scene: MOTA 0.97; the bar leaves room for other platforms' float rounding
+    assert r.mota > 0.9 and r.motp_mm < 60, r
+    st = tr.status[-1]
+    assert st.cameras[1].frames_missing >= 95
+
+
+@pytest.mark.daemon
+@pytest.mark.parametrize("n_cameras,seed", [(4, 11), (6, 12), (8, 13)])
+def test_daemon_multi_person_on_rigs_built_differently(tmp_path, daemon_path, n_cameras, seed):
+    rig = random_rig(np.random.default_rng(seed), n_cameras)
+    model = DetectorModel(sigma_px=2.0, p_miss=0.05, fa_rate=0.2, dropout_cam=None)
+    r, _, _ = _run_and_score(daemon_path, tmp_path, rig, "interaction", seed, model=model)
+    assert r.id_switches == 0, r
+    assert r.mota > 0.95, r
+
+
+@pytest.mark.daemon
+def test_daemon_false_alarm_flood_counted_tracks_kept(tmp_path, daemon_path):
+    rig = smartroom()
+    rp = tmp_path / "rig.yaml"
+    rig.write(rp)
+    rng = np.random.default_rng(3)
+    people = np.array([[1.5, 1.5, 1.7], [4.0, 3.5, 1.8]])
+    log = tmp_path / "flood.lcm"
+    w = LogWriter(str(log))
+    n_frames = 150
+    for f in range(n_frames):
+        u = T0_UTIME + f * 40000
+        w.write(u, "GROUND_TRUTH", ground_truth(u, f, [1, 2], people))
+        for cam in rig.cameras:
+            dets = [tuple(p) for p in cam.project(people) + rng.normal(0, 2, (2, 2))]
+            if f >= 50:  # 300 false alarms per camera per frame from frame 50 on
+                dets += [(rng.uniform(0, 767), rng.uniform(0, 575)) for _ in range(300)]
+                rng.shuffle(dets)
+            w.write(u, f"DETECTIONS_{cam.name}", camera_frame(u, f, cam, dets, 2.0))
+    w.close()
+    out = tmp_path / "flood_tracks.lcm"
+    r = subprocess.run([str(daemon_path), "--rig", str(rp), "--in", f"file://{log}?speed=0", "--out",
+                        f"file://{out}?mode=w"], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    tr = read_log(str(out), lambda c: c in ("TRACKS", "MVTRACK_STATUS"))
+    sc = read_log(str(log), lambda c: c == "GROUND_TRUTH")
+    res = clear_mot(pair_frames(sc, tr, rig.frame_rate))
+    # the two people keep their identities through the flood; (the flood's random agreements do
+    # confirm ghost tracks: a known limit, README)
+    assert res.id_switches == 0 and res.misses <= 10, res
+    assert max(len(v) for v in tr.tracks.values()) <= 32
+    st = tr.status[-1]
+    assert st.rejected_over_capacity >= 100 * 5 * (302 - 64) * 0.99
+    assert "capacity" in r.stderr
