@@ -1,6 +1,7 @@
 #include "mvt_assoc.h"
 
 #include <math.h>
+#include <stddef.h>
 
 static int feasible(mvt_real c)
 {
