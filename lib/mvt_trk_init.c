@@ -13,7 +13,6 @@
 #include <math.h>
 #include <string.h>
 
-#include "mvt_linalg.h"
 #include "mvt_trk.h"
 
 int mvt_trk_inside_volume(const mvt_tracker_config_t *c, const mvt_real x[3])
