@@ -416,6 +416,22 @@ static int option_pos(const char *opt_name, const char *arg, double *out)
     return 0;
 }
 
+/* Index of arg among names, or -1 after printing the allowed values. */
+static int option_choice(const char *opt_name, const char *arg, const char *const names[], int n)
+{
+    for (int i = 0; i < n; i++) {
+        if (strcmp(arg, names[i]) == 0) {
+            return i;
+        }
+    }
+    fprintf(stderr, "mvtrackd: unknown %s '%s' (", opt_name, arg);
+    for (int i = 0; i < n; i++) {
+        fprintf(stderr, "%s%s", i ? ", " : "", names[i]);
+    }
+    fprintf(stderr, ")\n");
+    return -1;
+}
+
 static daemon_state_t g_state; /* large (the tracker and its workspaces): static, not on the stack */
 
 int main(int argc, char **argv)
@@ -479,36 +495,22 @@ int main(int argc, char **argv)
     }
     mvt_tracker_config_t cfg;
     mvt_tracker_config_default(&cfg);
-    if (strcmp(mode, "pkf") == 0 || strcmp(mode, "ekf") == 0) {
-        cfg.lin = MVT_PKF_JACOBIAN;
-    } else if (strcmp(mode, "pkf-paper") == 0) {
-        cfg.lin = MVT_PKF_PAPER;
-    } else if (strcmp(mode, "pkf-centred") == 0) {
-        cfg.lin = MVT_PKF_PAPER_CENTRED;
-    } else if (strcmp(mode, "kf") == 0) {
-        cfg.filter = MVT_FILTER_TRIANGULATE;
-    } else {
-        fprintf(stderr, "mvtrackd: unknown --mode '%s' (pkf, ekf, pkf-paper, pkf-centred, kf)\n", mode);
+    static const char *const modes[] = {"pkf", "ekf", "pkf-paper", "pkf-centred", "kf"};
+    static const char *const gates[] = {"chi2", "paper"};
+    static const char *const merges[] = {"neither", "share", "off"};
+    const int mi = option_choice("--mode", mode, modes, 5);
+    const int gi = option_choice("--gate", gate, gates, 2);
+    const int ri = option_choice("--merge", merge, merges, 3);
+    if (mi < 0 || gi < 0 || ri < 0) {
         return 2;
     }
-    if (strcmp(gate, "chi2") == 0) {
-        cfg.gate = MVT_GATE_CHI2;
-    } else if (strcmp(gate, "paper") == 0) {
-        cfg.gate = MVT_GATE_PAPER;
-    } else {
-        fprintf(stderr, "mvtrackd: unknown --gate '%s' (chi2, paper)\n", gate);
-        return 2;
-    }
-    if (strcmp(merge, "neither") == 0) {
-        cfg.merge = MVT_MERGE_NEITHER;
-    } else if (strcmp(merge, "share") == 0) {
-        cfg.merge = MVT_MERGE_SHARE;
-    } else if (strcmp(merge, "off") == 0) {
-        cfg.merge = MVT_MERGE_OFF;
-    } else {
-        fprintf(stderr, "mvtrackd: unknown --merge '%s' (neither, share, off)\n", merge);
-        return 2;
-    }
+    static const mvt_pkf_lin_t mode_lin[] = {MVT_PKF_JACOBIAN, MVT_PKF_JACOBIAN, MVT_PKF_PAPER,
+                                             MVT_PKF_PAPER_CENTRED, MVT_PKF_JACOBIAN};
+    cfg.lin = mode_lin[mi];
+    cfg.filter = mi == 4 ? MVT_FILTER_TRIANGULATE : MVT_FILTER_PROJECTIVE;
+    cfg.gate = gi == 0 ? MVT_GATE_CHI2 : MVT_GATE_PAPER;
+    static const mvt_merge_t merge_of[] = {MVT_MERGE_NEITHER, MVT_MERGE_SHARE, MVT_MERGE_OFF};
+    cfg.merge = merge_of[ri];
     cfg.gate_chi2 = (mvt_real)gate_chi2;
     memcpy(cfg.q_m2s3, q, sizeof(q));
     d->mode_name = mode;
