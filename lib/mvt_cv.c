@@ -58,7 +58,7 @@ mvt_err_t mvt_cv_predict_to(mvt_cv_state_t *s, int64_t utime_us, const mvt_real 
     if (utime_us <= s->utime_us) {
         return MVT_OK;
     }
-    const mvt_err_t err = mvt_cv_predict(s, (mvt_real)((double)(utime_us - s->utime_us) * 1e-6), q);
+    const mvt_err_t err = mvt_cv_predict(s, mvt_us_to_s(utime_us - s->utime_us), q);
     if (err == MVT_OK) {
         s->utime_us = utime_us;
     }

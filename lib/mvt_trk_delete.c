@@ -93,7 +93,7 @@ void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us)
         }
         const mvt_real *P = tr->s.P;
         const mvt_real var_max = c->max_pos_std_m * c->max_pos_std_m;
-        const mvt_real unseen_s = (mvt_real)((double)(now_us - tr->last_update_us) * 1e-6);
+        const mvt_real unseen_s = mvt_us_to_s(now_us - tr->last_update_us);
         switch (tr->status) {
         case MVT_TRACK_TENTATIVE:
             if (tr->misses >= c->tentative_max_misses) {

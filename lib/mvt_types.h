@@ -30,6 +30,13 @@ typedef enum mvt_err {
 extern "C" {
 #endif
 
+/* A microsecond interval in seconds, computed in mvt_real (no double arithmetic on an FPU that
+ * has only single precision; exact for intervals below 2^24 us = 16.7 s in float). */
+static inline mvt_real mvt_us_to_s(int64_t us)
+{
+    return (mvt_real)us * MVT_R(1e-6);
+}
+
 /* Name of an error code, for logs. Never NULL. */
 const char *mvt_err_str(mvt_err_t err);
 
