@@ -16,7 +16,7 @@ elseif(MVT_MCU_CPU STREQUAL "cortex-m7")
 else()
   message(FATAL_ERROR "MVT_MCU_CPU must be cortex-m4 or cortex-m7, not '${MVT_MCU_CPU}'")
 endif()
-set(CMAKE_C_FLAGS_INIT "${_mvt_cpu_flags} -ffunction-sections -fdata-sections")
+set(CMAKE_C_FLAGS_INIT "${_mvt_cpu_flags} -ffunction-sections -fdata-sections -fcallgraph-info=su")
 set(CMAKE_EXE_LINKER_FLAGS_INIT "${_mvt_cpu_flags} -Wl,--gc-sections")
 
 set(CMAKE_FIND_ROOT_PATH_MODE_PROGRAM NEVER)
