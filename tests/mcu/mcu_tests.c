@@ -88,18 +88,19 @@ static float rel(float a, float b)
     return fabsf(a - b) / fmaxf(fabsf(b), 1e-6f);
 }
 
+/* A state with the reference's x0 and (block-diagonal) P0. */
+static void state_from(mvt_cv_state_t *s, const float x0[6], const float P0[36])
+{
+    memset(s, 0, sizeof(*s));
+    memcpy(s->x, x0, 6 * sizeof(float));
+    memcpy(s->P, P0, 36 * sizeof(float));
+}
+
 static void test_cv_filter(void)
 {
     const int f0 = g_fail;
     mvt_cv_state_t s;
-    mvt_real cov[9];
-    for (int i = 0; i < 3; i++) {
-        for (int j = 0; j < 3; j++) {
-            cov[i * 3 + j] = kf_P0[i * 6 + j];
-        }
-    }
-    mvt_cv_init(&s, kf_x0, cov, kf_P0[21], 0);
-    memcpy(&s.x[3], &kf_x0[3], 3 * sizeof(float));
+    state_from(&s, kf_x0, kf_P0);
     float worst = 0.0f;
     for (int n = 0; n < MCU_NKF; n++) {
         check(mvt_cv_predict(&s, kf_dt[n], kf_q) == MVT_OK, "mvt_cv_predict", 0, 0);
@@ -119,15 +120,7 @@ static void test_pkf(void)
 {
     const int f0 = g_fail;
     mvt_cv_state_t s;
-    mvt_real cov[9];
-    for (int i = 0; i < 3; i++) {
-        for (int j = 0; j < 3; j++) {
-            cov[i * 3 + j] = pkf_P0[i * 6 + j];
-        }
-    }
-    mvt_cv_init(&s, pkf_x0, cov, pkf_P0[21], 0);
-    memcpy(&s.x[3], &pkf_x0[3], 3 * sizeof(float));
-    s.P[35] = pkf_P0[35];
+    state_from(&s, pkf_x0, pkf_P0);
     for (int k = 0; k < MCU_NCAM; k++) {
         mvt_pkf_meas_t m;
         mvt_pkf_innov_t in;
