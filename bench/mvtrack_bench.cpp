@@ -13,6 +13,10 @@
  *                              0.3 false alarms per camera per frame; 3000 frames (2 min), each
  *                              step timed alone, the first 100 (births) excluded; also prints the
  *                              p99 and max and how many tracks were confirmed
+ *   pf_frame_5cam_4targets     a whole mvt_pft_step (--mode pf): 5 cameras with 192 x 144 masks
+ *                              and hue/saturation (the likelihood images are built inside the
+ *                              step), 4 people walking, 1000 particles each, MS+C; 600 frames,
+ *                              each timed alone, the first 50 (births) excluded
  */
 #include <algorithm>
 #include <chrono>
@@ -24,6 +28,7 @@
 
 #include <Eigen/Dense>
 
+#include "mvt_pft.h"
 #include "mvt_tracker.h"
 
 namespace {
@@ -156,6 +161,102 @@ struct EigenFilter {
     }
 };
 
+/* Paints person p's body (a vertical cylinder of radius 0.2 m under the head point) into a mask. */
+void paint_body(const mvt_camera_t &cam, mvt_mask_t &m, const mvt_real head[3], uint8_t hue, uint8_t sat)
+{
+    for (int iz = 0; iz <= 34; iz++) {
+        for (int ia = 0; ia < 16; ia++) {
+            for (int ir = 0; ir <= 2; ir++) {
+                const double a = 2 * M_PI * ia / 16, r = 0.1 * ir;
+                const mvt_real x[3] = {(mvt_real)(head[0] + r * std::cos(a)), (mvt_real)(head[1] + r * std::sin(a)),
+                                       (mvt_real)(head[2] * iz / 34.0)};
+                mvt_real uv[2];
+                if (mvt_cam_project(&cam, x, uv, nullptr) != MVT_OK) continue;
+                const int mu = (int)((uv[0] + 0.5f) / m.scale), mv = (int)((uv[1] + 0.5f) / m.scale);
+                for (int dv = -1; dv <= 1; dv++) {
+                    for (int du = -1; du <= 1; du++) {
+                        const int u = mu + du, v = mv + dv;
+                        if (u < 0 || v < 0 || u >= m.width || v >= m.height) continue;
+                        m.fg[v * m.width + u] = 1;
+                        m.hue[v * m.width + u] = hue;
+                        m.sat[v * m.width + u] = sat;
+                    }
+                }
+            }
+        }
+    }
+}
+
+void bench_pf(const mvt_camera_t *cams)
+{
+    static mvt_pft_t pft;
+    static mvt_frame_t frame;
+    static mvt_mask_t masks[5];
+    mvt_pft_config_t cfg;
+    mvt_pft_config_default(&cfg);
+    cfg.det.volume_min[0] = cfg.det.volume_min[1] = cfg.det.volume_min[2] = 0;
+    cfg.det.volume_max[0] = 6;
+    cfg.det.volume_max[1] = 5;
+    cfg.det.volume_max[2] = 2.5;
+    if (mvt_pft_init(&pft, &cfg, cams, 5) != MVT_OK) {
+        std::fprintf(stderr, "mvtrack-bench: pft init failed\n");
+        return;
+    }
+    const int frames = 600, skip = 50;
+    std::vector<double> ns;
+    for (int f = 0; f < frames; f++) {
+        const double t = f / 25.0;
+        mvt_real heads[4][3];
+        for (int p = 0; p < 4; p++) {  /* circles of 1 m radius around four centres */
+            const double a = 0.8 * t + p * 1.57;
+            heads[p][0] = (mvt_real)(1.8 + 2.4 * (p & 1) + 0.7 * std::cos(a));
+            heads[p][1] = (mvt_real)(1.5 + 2.0 * (p >> 1) + 0.7 * std::sin(a));
+            heads[p][2] = (mvt_real)(1.65 + 0.05 * p);
+        }
+        frame.utime_us = 1000000 + (int64_t)f * 40000;
+        for (int k = 0; k < 5; k++) {
+            mvt_mask_t &m = masks[k];
+            m.width = 192;
+            m.height = 144;
+            m.scale = 4;
+            m.has_colour = 1;
+            std::memset(m.fg, 0, 192 * 144);
+            std::memset(m.hue, 20, 192 * 144);
+            std::memset(m.sat, 30, 192 * 144);
+            mvt_view_t &v = frame.views[k];
+            v.observed = 1;
+            v.utime_us = frame.utime_us;
+            v.num_detections = 0;
+            for (int p = 0; p < 4; p++) {
+                paint_body(cams[k], m, heads[p], (uint8_t)(64 * p), (uint8_t)(160 + 20 * p));
+                mvt_real uv[2];
+                if (mvt_cam_project(&cams[k], heads[p], uv, nullptr) == MVT_OK) {
+                    mvt_detection_t &d = v.det[v.num_detections++];
+                    std::memset(&d, 0, sizeof(d));
+                    d.u = uv[0];
+                    d.v = uv[1];
+                    d.sigma_px = 3;
+                    d.score = 1;
+                    d.hue = d.saturation = -1;
+                }
+            }
+            v.mask = &m;
+        }
+        static mvt_output_t out;
+        const auto t0 = std::chrono::steady_clock::now();
+        mvt_pft_step(&pft, &frame, &out);
+        const auto t1 = std::chrono::steady_clock::now();
+        if (f >= skip) ns.push_back(std::chrono::duration<double, std::nano>(t1 - t0).count());
+    }
+    int targets = 0;
+    for (const auto &a : pft.targets) targets += a.id != 0;
+    std::sort(ns.begin(), ns.end());
+    std::printf("{\"bench\": \"pf_frame_5cam_4targets\", \"median_ns\": %.1f, \"p99_ns\": %.1f, \"max_ns\": %.1f, "
+                "\"runs\": %zu, \"iters\": 1, \"targets\": %d, \"particles\": %d}\n",
+                ns[ns.size() / 2], ns[ns.size() * 99 / 100], ns.back(), ns.size(), targets, cfg.num_particles);
+    std::fflush(stdout);
+}
+
 }  // namespace
 
 int main(int argc, char **argv)
@@ -165,11 +266,12 @@ int main(int argc, char **argv)
     for (const auto &w : want) {
         if (w == "--help" || w == "-h") {
             std::printf("usage: mvtrack-bench [filter_update_5cam] [tracker_frame_5cam_1target] "
-                        "[tracker_frame_8cam_16people]\n"
+                        "[tracker_frame_8cam_16people] [pf_frame_5cam_4targets]\n"
                         "Prints one JSON object per benchmark (peers: NAME.eigen).\n");
             return 0;
         }
-        if (w != "filter_update_5cam" && w != "tracker_frame_5cam_1target" && w != "tracker_frame_8cam_16people") {
+        if (w != "filter_update_5cam" && w != "tracker_frame_5cam_1target" && w != "tracker_frame_8cam_16people" &&
+            w != "pf_frame_5cam_4targets") {
             std::fprintf(stderr, "mvtrack-bench: unknown benchmark '%s'\n", w.c_str());
             return 2;
         }
@@ -309,6 +411,9 @@ int main(int argc, char **argv)
                     ns[ns.size() / 2], ns[ns.size() * 99 / 100], ns.back(), ns.size(),
                     (double)conf_sum / (double)ns.size(), (unsigned long long)tr.counters.births);
         std::fflush(stdout);
+    }
+    if (enabled("pf_frame_5cam_4targets")) {
+        bench_pf(rig.cams);
     }
     return 0;
 }

@@ -20,8 +20,10 @@
 #include <lcm/lcm.h>
 
 #include "assembler.h"
+#include "mvt_pft.h"
 #include "mvt_tracker.h"
 #include "mvtrack_camera_frame_t.h"
+#include "mvtrack_particles_t.h"
 #include "mvtrack_status_t.h"
 #include "mvtrack_tracks_t.h"
 #include "rig.h"
@@ -36,7 +38,12 @@ enum log_class { LOG_UNDECODABLE, LOG_UNKNOWN_CAMERA, LOG_BAD_VALUE, LOG_CAPACIT
 typedef struct daemon_state {
     const char *mode_name;
     mvtd_rig_t rig;
+    int pf;                    /* particle-filter mode: pft runs, tracker is unused */
     mvt_tracker_t tracker;
+    mvt_pft_t *pft;
+    const mvt_tracker_t *trk;  /* the blob-level tracker in use (status, detection selection) */
+    int publish_particles;     /* particles per target on MVTRACK_PARTICLES, 0: none */
+    int64_t masks_decoded, masks_rejected;
     mvtd_asm_t assembler;
     mvt_output_t output;
     lcm_t *lcm_in;
@@ -149,8 +156,8 @@ static void publish_status(daemon_state_t *d)
     }
     st.rejected_undecodable = d->rej_undecodable;
     st.rejected_unknown_camera = d->rej_unknown_camera;
-    st.rejected_bad_value = d->rej_bad_value + (int64_t)d->tracker.counters.detections_nonfinite +
-                            (int64_t)d->tracker.counters.detections_undistort_failed;
+    st.rejected_bad_value = d->rej_bad_value + (int64_t)d->trk->counters.detections_nonfinite +
+                            (int64_t)d->trk->counters.detections_undistort_failed;
     st.rejected_over_capacity = d->rej_over_capacity;
     st.rejected_time_backwards = d->rej_time_backwards;
     st.rejected_late = d->rej_late;
@@ -165,7 +172,7 @@ static void publish_status(daemon_state_t *d)
     st.latency_ms_p50 = percentile(tmp, n, 0.5);
     st.latency_ms_p99 = percentile(tmp, n, 0.99);
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
-        const mvt_track_t *tr = &d->tracker.tracks[t];
+        const mvt_track_t *tr = &d->trk->tracks[t];
         if (tr->id == 0) {
             continue;
         }
@@ -177,8 +184,8 @@ static void publish_status(daemon_state_t *d)
             st.tracks_coasting++;
         }
     }
-    st.tracks_dropped_capacity = (int64_t)d->tracker.counters.births_refused_full;
-    const mvt_counters_t *c = &d->tracker.counters;
+    st.tracks_dropped_capacity = (int64_t)d->trk->counters.births_refused_full;
+    const mvt_counters_t *c = &d->trk->counters;
     st.births = (int64_t)c->births;
     st.deleted_tentative = (int64_t)c->deleted_tentative;
     st.deleted_unseen = (int64_t)c->deleted_unseen;
@@ -191,8 +198,72 @@ static void publish_status(daemon_state_t *d)
     st.updates_merged_shared = (int64_t)c->merged_updates;
     st.birth_candidates_dropped = (int64_t)c->birth_candidates_dropped;
     st.numeric_faults = (int64_t)c->numeric_faults;
+    st.masks_decoded = d->masks_decoded;
+    st.masks_rejected = d->masks_rejected;
+    if (d->pf) {
+        const mvt_pft_counters_t *pc = &d->pft->counters;
+        st.views_without_mask = (int64_t)pc->views_without_mask;
+        st.pf_resamples = (int64_t)pc->resamples;
+        st.numeric_faults += (int64_t)pc->numeric_faults;
+        /* the published tracks are the particle targets: count them, not the blob tracks */
+        st.tracks_tentative = st.tracks_confirmed = st.tracks_coasting = 0;
+        for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+            const mvt_pft_target_t *a = &d->pft->targets[t];
+            if (a->id != 0) {
+                st.tracks_confirmed += a->status == MVT_TRACK_CONFIRMED;
+                st.tracks_coasting += a->status == MVT_TRACK_COASTING;
+            }
+        }
+        st.births = (int64_t)pc->births;
+        st.deleted_unseen = (int64_t)pc->deleted_lost;
+        st.deleted_outside = (int64_t)pc->deleted_outside;
+        st.deleted_duplicate = (int64_t)pc->deleted_duplicate;
+        st.tracks_dropped_capacity = (int64_t)pc->births_refused_full;
+    }
     mvtrack_status_t_publish(d->lcm_out, "MVTRACK_STATUS", &st);
     d->last_status_wall_s = now;
+}
+
+/* A systematic sample of publish_particles particles per target (weights renormalised). */
+static void publish_particles(daemon_state_t *d, int64_t utime)
+{
+    static int32_t ids[MVT_MAX_TARGETS * MVT_MAX_PARTICLES];
+    static float px[MVT_MAX_TARGETS * MVT_MAX_PARTICLES], py[MVT_MAX_TARGETS * MVT_MAX_PARTICLES],
+        pz[MVT_MAX_TARGETS * MVT_MAX_PARTICLES];
+    static float wt[MVT_MAX_TARGETS * MVT_MAX_PARTICLES];
+    int n = 0;
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        const mvt_pft_target_t *a = &d->pft->targets[t];
+        if (a->id == 0) {
+            continue;
+        }
+        const mvt_pf_pool_t *p = &a->pool;
+        const int m = d->publish_particles < p->n ? d->publish_particles : p->n;
+        const int first = n;
+        double sum = 0.0;
+        for (int j = 0; j < m; j++) {
+            const int i = (int)((long long)j * p->n / m);
+            ids[n] = a->id;
+            px[n] = (float)p->x[i];
+            py[n] = (float)p->y[i];
+            pz[n] = (float)p->z[i];
+            wt[n] = (float)p->w[i];
+            sum += (double)p->w[i];
+            n++;
+        }
+        for (int j = first; j < n && sum > 0.0; j++) {
+            wt[j] = (float)((double)wt[j] / sum);
+        }
+    }
+    mvtrack_particles_t msg;
+    msg.utime = utime;
+    msg.num_particles = n;
+    msg.id = ids;
+    msg.x = px;
+    msg.y = py;
+    msg.z = pz;
+    msg.weight = wt;
+    mvtrack_particles_t_publish(d->lcm_out, "MVTRACK_PARTICLES", &msg);
 }
 
 static void on_frame(void *ctx, mvt_frame_t *frame, int complete)
@@ -200,7 +271,8 @@ static void on_frame(void *ctx, mvt_frame_t *frame, int complete)
     daemon_state_t *d = ctx;
     (void)complete;
     const double t0 = wall_s();
-    const mvt_err_t err = mvt_tracker_step(&d->tracker, frame, &d->output);
+    const mvt_err_t err =
+        d->pf ? mvt_pft_step(d->pft, frame, &d->output) : mvt_tracker_step(&d->tracker, frame, &d->output);
     if (err != MVT_OK) {
         log_limited(d, LOG_TRACKER, "frame at utime %lld skipped: %s", (long long)frame->utime_us, mvt_err_str(err));
         return;
@@ -231,17 +303,42 @@ static void on_frame(void *ctx, mvt_frame_t *frame, int complete)
     }
     msg.publish_utime = wall_utime();
     mvtrack_tracks_t_publish(d->lcm_out, "TRACKS", &msg);
+    if (d->pf && d->publish_particles > 0) {
+        publish_particles(d, d->output.utime_us);
+    }
     d->frames_processed++;
     const double t1 = wall_s();
     const int slot = d->n_proc % PROC_RING;
     d->proc_ms[slot] = (float)((t1 - t0) * 1e3);
     d->latency_ms[slot] = (float)((t1 - d->last_accept_wall_s) * 1e3);
     d->n_proc++;
-    if (d->tracker.counters.births_refused_full > d->tracker_births_full_seen) {
-        d->tracker_births_full_seen = d->tracker.counters.births_refused_full;
+    if (d->trk->counters.births_refused_full > d->tracker_births_full_seen) {
+        d->tracker_births_full_seen = d->trk->counters.births_refused_full;
         log_limited(d, LOG_CAPACITY, "track capacity MVT_MAX_TARGETS=%d full: %llu births refused so far",
-                    MVT_MAX_TARGETS, (unsigned long long)d->tracker.counters.births_refused_full);
+                    MVT_MAX_TARGETS, (unsigned long long)d->trk->counters.births_refused_full);
     }
+}
+
+/* Two mask buffers per camera: the one the open frame set references is never overwritten. */
+static mvt_mask_t g_masks[MVT_MAX_CAMERAS][2];
+
+static const mvt_mask_t *decode_mask(daemon_state_t *d, int cam, const mvtrack_camera_frame_t *m)
+{
+    const mvt_view_t *open_view = &d->assembler.frame.views[cam];
+    const int in_open = d->assembler.open && (d->assembler.present & (1u << cam)) != 0u;
+    const int bank = in_open && open_view->mask == &g_masks[cam][0] ? 1 : 0;
+    mvt_mask_t *mask = &g_masks[cam][bank];
+    if (mvt_mask_from_runs(mask, m->width, m->height, m->mask_width, m->mask_height, m->runs, m->num_runs, m->hue,
+                           m->saturation, m->num_hs) != MVT_OK) {
+        d->masks_rejected++;
+        log_limited(d, LOG_BAD_VALUE,
+                    "camera %s: mask %dx%d with %d runs and %d hue/saturation bytes rejected (runs must sum to the "
+                    "mask, the image must be an integer multiple of it, at most %d pixels)",
+                    d->rig.names[cam], m->mask_width, m->mask_height, m->num_runs, m->num_hs, MVT_MAX_MASK_PIXELS);
+        return NULL;
+    }
+    d->masks_decoded++;
+    return mask;
 }
 
 static void on_detections(const lcm_recv_buf_t *rbuf, const char *channel, void *ctx)
@@ -299,7 +396,7 @@ static void on_detections(const lcm_recv_buf_t *rbuf, const char *channel, void 
         o->saturation = (mvt_real)s->saturation;
     }
     int idx[MVT_MAX_DETECTIONS];
-    const int kept = mvt_tracker_select(&d->tracker, cam, in, n_in, idx);
+    const int kept = mvt_tracker_select(d->trk, cam, in, n_in, idx);
     if (n_in > kept) {
         d->rej_over_capacity += n_in - kept;
         log_limited(d, LOG_CAPACITY,
@@ -311,6 +408,10 @@ static void on_detections(const lcm_recv_buf_t *rbuf, const char *channel, void 
         v->det[i] = in[idx[i]];
     }
     v->num_detections = kept;
+    v->mask = NULL;
+    if (d->pf && (m.mask_width != 0 || m.mask_height != 0)) {
+        v->mask = decode_mask(d, cam, &m);
+    }
     mvtrack_camera_frame_t_decode_cleanup(&m);
 
     const double now = wall_s();
@@ -361,6 +462,18 @@ static void usage(FILE *f)
             "                      pkf-paper    the paper's literal H (Eq. 18), OpenCV pixel origin\n"
             "                      pkf-centred  Eq. 18 with pixels centred on the principal point\n"
             "                      kf           baseline: triangulate per frame, then a 3D Kalman filter\n"
+            "                      pf           particle filter per person weighted by the cameras'\n"
+            "                                   foreground masks, and their hue/saturation when sent\n"
+            "                                   (MS+C; MS when a camera sends no colour); needs masks\n"
+            "                      pf-ms        the same, motion masks only (colour ignored)\n"
+            "  --particles N       pf: particles per person, 16..%d (default %d)\n"
+            "  --exclusion M       pf: particles within M metres (horizontally) of another person's\n"
+            "                      centre are penalised, so two filters cannot share one body;\n"
+            "                      0 = off, the paper's independent filters (default 0.3)\n"
+            "  --seed N            pf: random number seed (default 1); same seed, same output\n"
+            "  --publish-particles N\n"
+            "                      pf: publish N particles per person on MVTRACK_PARTICLES\n"
+            "                      (mvtrack.particles_t; default 0 = none)\n"
             "  --gate chi2|paper   association gate: innovation chi-square (default) or the paper's\n"
             "                      projected ellipsoid (Eq. 22-26)\n"
             "  --gate-chi2 X       chi-square threshold, 2 dof (default 13.8)\n"
@@ -377,7 +490,7 @@ static void usage(FILE *f)
             "\n"
             "Exit status: 0 after SIGINT/SIGTERM or at the end of a file:// log; 2 on bad arguments\n"
             "or rig; 1 when LCM cannot be opened.\n",
-            DEFAULT_URL);
+            DEFAULT_URL, MVT_MAX_PARTICLES, MVT_MAX_PARTICLES);
 }
 
 static int parse_q(const char *s, mvt_real q[3])
@@ -416,6 +529,20 @@ static int option_pos(const char *opt_name, const char *arg, double *out)
     return 0;
 }
 
+/* Parses an integer option in [lo, hi]; prints why not and returns -1 on failure. */
+static int option_int(const char *opt_name, const char *arg, long lo, long hi, long *out)
+{
+    char *end = NULL;
+    errno = 0;
+    const long v = strtol(arg, &end, 10);
+    if (errno != 0 || end == arg || *end != '\0' || v < lo || v > hi) {
+        fprintf(stderr, "mvtrackd: %s needs an integer in %ld..%ld, got '%s'\n", opt_name, lo, hi, arg);
+        return -1;
+    }
+    *out = v;
+    return 0;
+}
+
 /* Index of arg among names, or -1 after printing the allowed values. */
 static int option_choice(const char *opt_name, const char *arg, const char *const names[], int n)
 {
@@ -447,9 +574,13 @@ int main(int argc, char **argv)
         {"q", required_argument, 0, 'q'},        {"sigma-px", required_argument, 0, 's'},
         {"deadline-ms", required_argument, 0, 'd'}, {"verbose", no_argument, 0, 'v'},
         {"merge", required_argument, 0, 'M'},    {"help", no_argument, 0, 'h'},
+        {"particles", required_argument, 0, 'P'}, {"exclusion", required_argument, 0, 'X'},
+        {"seed", required_argument, 0, 'S'},     {"publish-particles", required_argument, 0, 'Q'},
         {0, 0, 0, 0}};
     int opt;
-    while ((opt = getopt_long(argc, argv, "r:i:o:m:g:c:q:s:d:M:vh", opts, NULL)) != -1) {
+    long particles = MVT_MAX_PARTICLES, seed = 1, publish_particles = 0;
+    double exclusion_m = 0.3;
+    while ((opt = getopt_long(argc, argv, "r:i:o:m:g:c:q:s:d:M:vhP:X:S:Q:", opts, NULL)) != -1) {
         switch (opt) {
         case 'r': rig_path = optarg; break;
         case 'i': in_url = optarg; break;
@@ -478,6 +609,30 @@ int main(int argc, char **argv)
                 return 2;
             }
             break;
+        case 'P':
+            if (option_int("--particles", optarg, 16, MVT_MAX_PARTICLES, &particles) != 0) {
+                return 2;
+            }
+            break;
+        case 'S':
+            if (option_int("--seed", optarg, 0, 2147483647L, &seed) != 0) {
+                return 2;
+            }
+            break;
+        case 'Q':
+            if (option_int("--publish-particles", optarg, 0, MVT_MAX_PARTICLES, &publish_particles) != 0) {
+                return 2;
+            }
+            break;
+        case 'X': {
+            char *end = NULL;
+            exclusion_m = strtod(optarg, &end);
+            if (end == optarg || *end != '\0' || !(exclusion_m >= 0.0) || exclusion_m > 10.0) {
+                fprintf(stderr, "mvtrackd: --exclusion needs metres in [0, 10], got '%s'\n", optarg);
+                return 2;
+            }
+            break;
+        }
         case 'v': d->verbose = 1; break;
         case 'h': usage(stdout); return 0;
         default: usage(stderr); return 2;
@@ -495,17 +650,18 @@ int main(int argc, char **argv)
     }
     mvt_tracker_config_t cfg;
     mvt_tracker_config_default(&cfg);
-    static const char *const modes[] = {"pkf", "ekf", "pkf-paper", "pkf-centred", "kf"};
+    static const char *const modes[] = {"pkf", "ekf", "pkf-paper", "pkf-centred", "kf", "pf", "pf-ms"};
     static const char *const gates[] = {"chi2", "paper"};
     static const char *const merges[] = {"neither", "share", "off"};
-    const int mi = option_choice("--mode", mode, modes, 5);
+    const int mi = option_choice("--mode", mode, modes, 7);
     const int gi = option_choice("--gate", gate, gates, 2);
     const int ri = option_choice("--merge", merge, merges, 3);
     if (mi < 0 || gi < 0 || ri < 0) {
         return 2;
     }
     static const mvt_pkf_lin_t mode_lin[] = {MVT_PKF_JACOBIAN, MVT_PKF_JACOBIAN, MVT_PKF_PAPER,
-                                             MVT_PKF_PAPER_CENTRED, MVT_PKF_JACOBIAN};
+                                             MVT_PKF_PAPER_CENTRED, MVT_PKF_JACOBIAN, MVT_PKF_JACOBIAN,
+                                             MVT_PKF_JACOBIAN};
     cfg.lin = mode_lin[mi];
     cfg.filter = mi == 4 ? MVT_FILTER_TRIANGULATE : MVT_FILTER_PROJECTIVE;
     cfg.gate = gi == 0 ? MVT_GATE_CHI2 : MVT_GATE_PAPER;
@@ -534,7 +690,25 @@ int main(int argc, char **argv)
             return 2;
         }
     }
-    if (mvt_tracker_init(&d->tracker, &cfg, cams, d->rig.num_cameras) != MVT_OK) {
+    d->pf = mi >= 5;
+    d->publish_particles = (int)publish_particles;
+    d->trk = &d->tracker;
+    if (d->pf) {
+        static mvt_pft_t pft; /* ~1.5 MB at the default capacities: static, not on the stack */
+        mvt_pft_config_t pcfg;
+        mvt_pft_config_default(&pcfg);
+        pcfg.det = cfg;
+        pcfg.num_particles = (int)particles;
+        pcfg.use_colour = mi == 5;
+        pcfg.exclusion_m = (mvt_real)exclusion_m;
+        pcfg.seed = (uint64_t)seed;
+        if (mvt_pft_init(&pft, &pcfg, cams, d->rig.num_cameras) != MVT_OK) {
+            fprintf(stderr, "mvtrackd: invalid particle-filter configuration\n");
+            return 2;
+        }
+        d->pft = &pft;
+        d->trk = &pft.det;
+    } else if (mvt_tracker_init(&d->tracker, &cfg, cams, d->rig.num_cameras) != MVT_OK) {
         fprintf(stderr, "mvtrackd: invalid tracker configuration\n");
         return 2;
     }

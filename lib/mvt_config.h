@@ -32,6 +32,23 @@
 #error "MVT_MAX_DETECTIONS must be in 1..1024"
 #endif
 
+/* Particles per target in the particle-filter tracker (mvt_pft). Default 1000, range 16..65535. */
+#ifndef MVT_MAX_PARTICLES
+#define MVT_MAX_PARTICLES 1000
+#endif
+#if MVT_MAX_PARTICLES < 16 || MVT_MAX_PARTICLES > 65535
+#error "MVT_MAX_PARTICLES must be in 16..65535"
+#endif
+
+/* Pixels of one camera's foreground mask (mask_width * mask_height). Default 110592 (384 x 288,
+ * half of 768 x 576; the usual quarter resolution needs 27648), range 16..4194304. */
+#ifndef MVT_MAX_MASK_PIXELS
+#define MVT_MAX_MASK_PIXELS 110592
+#endif
+#if MVT_MAX_MASK_PIXELS < 16 || MVT_MAX_MASK_PIXELS > 4194304
+#error "MVT_MAX_MASK_PIXELS must be in 16..4194304"
+#endif
+
 /* Real type: float (default, for FPU-equipped microcontrollers) or double (MVT_USE_DOUBLE=1). */
 #ifndef MVT_USE_DOUBLE
 #define MVT_USE_DOUBLE 0

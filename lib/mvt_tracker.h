@@ -118,6 +118,8 @@ typedef struct mvt_view {
     int64_t utime_us;     /* capture time */
     int num_detections;   /* 0..MVT_MAX_DETECTIONS (larger is counted and clamped) */
     mvt_detection_t det[MVT_MAX_DETECTIONS];
+    const struct mvt_mask *mask; /* foreground mask and colour, or NULL; owned by the caller and
+                                    valid until the frame is processed (used by mvt_pft only) */
 } mvt_view_t;
 
 typedef struct mvt_frame {

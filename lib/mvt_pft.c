@@ -1,0 +1,371 @@
+#include "mvt_pft.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "mvt_trk.h"
+
+void mvt_pft_config_default(mvt_pft_config_t *c)
+{
+    MVT_ASSERT(c != NULL);
+    memset(c, 0, sizeof(*c));
+    mvt_tracker_config_default(&c->det);
+    c->model.sigma_px = MVT_R(4.0);
+    c->model.p_b = MVT_R(0.2);
+    c->model.sigma_h = MVT_R(0.05);
+    c->model.sigma_s = MVT_R(0.1);
+    c->model.h_b = MVT_R(0.5);
+    c->model.s_b = MVT_R(0.5);
+    c->noise.pos_m2s = MVT_R(0.02);
+    c->noise.vel_m2s3 = MVT_R(1.0);
+    c->noise.colour_1s = MVT_R(0.005);
+    c->noise.z_renew = MVT_R(0.2);
+    c->noise.z_min = MVT_R(0.0);
+    c->noise.z_max = MVT_R(2.2);
+    c->num_particles = MVT_MAX_PARTICLES;
+    c->use_colour = 1;
+    c->lik_exponent = MVT_R(0.5);
+    c->ess_fraction = MVT_R(0.5);
+    c->p_h = MVT_R(0.95);
+    c->head_quantile = MVT_R(0.97);
+    c->exclusion_m = MVT_R(0.3);
+    c->exclusion_log = MVT_R(8.0);
+    c->birth_sep_m = MVT_R(0.5);
+    c->birth_min_height_m = MVT_R(1.0);
+    c->birth_xy_std_m = MVT_R(0.1);
+    c->dup_dist_m = MVT_R(0.2);
+    c->support_fraction = MVT_R(0.25);
+    c->support_min_views = 2;
+    c->lost_s = MVT_R(1.0);
+    c->seed = 1u;
+}
+
+static int in_range(mvt_real x, mvt_real lo, mvt_real hi)
+{
+    return x >= lo && x <= hi;
+}
+
+mvt_err_t mvt_pft_init(mvt_pft_t *self, const mvt_pft_config_t *cfg, const mvt_camera_t *cams, int num_cameras)
+{
+    MVT_ASSERT(self != NULL && cfg != NULL && cams != NULL);
+    const mvt_pf_noise_t *q = &cfg->noise;
+    if (cfg->num_particles < 16 || cfg->num_particles > MVT_MAX_PARTICLES || !(q->pos_m2s >= MVT_R(0.0)) ||
+        !(q->vel_m2s3 >= MVT_R(0.0)) || !(q->colour_1s >= MVT_R(0.0)) ||
+        !in_range(q->z_renew, MVT_R(0.0), MVT_R(1.0)) || !(q->z_max >= q->z_min) || !isfinite(q->z_min) ||
+        !isfinite(q->z_max) || !isfinite(q->pos_m2s) ||
+        !isfinite(q->vel_m2s3) || !isfinite(q->colour_1s) || !(cfg->ess_fraction > MVT_R(0.0)) ||
+        !in_range(cfg->ess_fraction, MVT_R(0.0), MVT_R(1.0)) || !(cfg->p_h > MVT_R(0.0)) ||
+        !in_range(cfg->p_h, MVT_R(0.0), MVT_R(1.0)) || !(cfg->head_quantile > MVT_R(0.0)) ||
+        !in_range(cfg->head_quantile, MVT_R(0.0), MVT_R(1.0)) || !in_range(cfg->exclusion_m, MVT_R(0.0), MVT_R(10.0)) ||
+        !in_range(cfg->exclusion_log, MVT_R(0.0), MVT_R(1e3)) || !(cfg->birth_sep_m > MVT_R(0.0)) || !isfinite(cfg->birth_min_height_m) ||
+        !(cfg->birth_xy_std_m > MVT_R(0.0)) || !in_range(cfg->dup_dist_m, MVT_R(0.0), MVT_R(10.0)) ||
+        !(cfg->support_fraction > MVT_R(0.0)) || !in_range(cfg->support_fraction, MVT_R(0.0), MVT_R(1.0)) ||
+        cfg->support_min_views < 1 || !(cfg->lost_s > MVT_R(0.0)) || !isfinite(cfg->lost_s) ||
+        !isfinite(cfg->birth_sep_m) || !(cfg->lik_exponent > MVT_R(0.0)) || !(cfg->lik_exponent <= MVT_R(1.0)) || !isfinite(cfg->birth_xy_std_m)) {
+        return MVT_ERR_INVALID;
+    }
+    memset(self, 0, sizeof(*self));
+    self->cfg = *cfg;
+    if (mvt_pf_tables_init(&self->tab, &cfg->model) != MVT_OK) {
+        return MVT_ERR_INVALID;
+    }
+    const mvt_err_t err = mvt_tracker_init(&self->det, &cfg->det, cams, num_cameras);
+    if (err != MVT_OK) {
+        return err;
+    }
+    for (int k = 0; k < num_cameras; k++) {
+        mvt_pf_fov_init(&self->fovs[k], &self->det.cams[k], MVT_R(0.05));
+    }
+    mvt_rng_seed(&self->rng, cfg->seed, 0x6d7674726b5066ULL);
+    self->next_id = 1;
+    return MVT_OK;
+}
+
+static int popcount(uint32_t x)
+{
+    int n = 0;
+    for (; x != 0u; x &= x - 1u) { /* at most 32 rounds */
+        n++;
+    }
+    return n;
+}
+
+/* A new target around a confirmed blob track: the body below the head point, colour sampled
+ * from the pixels the particles project onto. */
+static void birth(mvt_pft_t *self, mvt_pft_target_t *t, const mvt_track_out_t *src, int64_t now_us)
+{
+    const mvt_pft_config_t *c = &self->cfg;
+    mvt_pf_pool_t *p = &t->pool;
+    const int num_cams = self->det.num_cameras;
+    memset(t, 0, sizeof(*t) - sizeof(t->pool));
+    t->id = self->next_id;
+    self->next_id = self->next_id == INT32_MAX ? 1 : self->next_id + 1;
+    t->status = MVT_TRACK_CONFIRMED;
+    t->last_supported_us = now_us;
+    p->n = c->num_particles;
+    const mvt_real top = src->pos_m[2] > MVT_R(0.2) ? src->pos_m[2] : MVT_R(0.2);
+    for (int i = 0; i < p->n; i++) {
+        mvt_real g[4];
+        mvt_rng_normal2(&self->rng, g);
+        mvt_rng_normal2(&self->rng, g + 2);
+        p->x[i] = src->pos_m[0] + c->birth_xy_std_m * g[0];
+        p->y[i] = src->pos_m[1] + c->birth_xy_std_m * g[1];
+        p->z[i] = MVT_R(0.05) + (top - MVT_R(0.05)) * mvt_rng_uniform(&self->rng);
+        p->vx[i] = src->vel_ms[0] + MVT_R(0.2) * g[2];
+        p->vy[i] = src->vel_ms[1] + MVT_R(0.2) * g[3];
+        p->vz[i] = MVT_R(0.0);
+        p->h[i] = mvt_rng_uniform(&self->rng);
+        p->s[i] = mvt_rng_uniform(&self->rng);
+        p->w[i] = MVT_R(1.0) / (mvt_real)p->n;
+        for (int j = 0; j < num_cams; j++) {
+            const int k = (i + j) % num_cams;
+            const mvt_pf_image_t *img = &self->images[k];
+            if (img->width < 1 || !img->mask->has_colour) {
+                continue;
+            }
+            const mvt_real xw[3] = {p->x[i], p->y[i], p->z[i]};
+            mvt_real uv[2];
+            if (mvt_cam_project(&self->det.cams[k], xw, uv, NULL) != MVT_OK) {
+                continue;
+            }
+            const mvt_real mu = (uv[0] + MVT_R(0.5)) / (mvt_real)img->scale;
+            const mvt_real mv = (uv[1] + MVT_R(0.5)) / (mvt_real)img->scale;
+            if (!(mu >= MVT_R(0.0) && mv >= MVT_R(0.0) && mu < (mvt_real)img->width && mv < (mvt_real)img->height)) {
+                continue;
+            }
+            const int idx = (int)mv * img->width + (int)mu;
+            if (!img->mask->fg[idx]) {
+                continue;
+            }
+            p->h[i] = ((mvt_real)img->mask->hue[idx] + mvt_rng_uniform(&self->rng)) / MVT_R(256.0);
+            p->s[i] = (mvt_real)img->mask->sat[idx] / MVT_R(255.0);
+            break;
+        }
+    }
+    /* a first estimate so that the exclusion prior and output have something this frame */
+    mvt_pf_estimate(p, c->p_h, c->head_quantile, self->order, &t->est);
+    self->counters.births++;
+}
+
+/* The head: scanning down the column above the particles' mean (x, y), the first height that
+ * projects onto foreground (D above the midpoint of p_B and 1) in at least half of the cameras
+ * that sent masks (at least one). The particles fill the body's core: where the mask's blur makes
+ * every view uncertain (the top of the head), few of them survive. O(steps * C). */
+static mvt_real column_top(const mvt_pft_t *self, const mvt_real xy[2], mvt_real fallback, int masks)
+{
+    const mvt_pf_noise_t *q = &self->cfg.noise;
+    const uint8_t fg_level = (uint8_t)(((int)self->tab.d_floor + 255) / 2);
+    const int need = masks > 1 ? (masks + 1) / 2 : 1;
+    const mvt_real step = MVT_R(0.01);
+    const int steps = (int)((q->z_max - q->z_min) / step);
+    for (int j = 0; j <= steps && j < 4096; j++) {
+        const mvt_real xw[3] = {xy[0], xy[1], q->z_max - step * (mvt_real)j};
+        int votes = 0;
+        for (int k = 0; k < self->det.num_cameras; k++) {
+            const mvt_pf_image_t *img = &self->images[k];
+            mvt_real uv[2];
+            if (img->width < 1 || mvt_cam_project(&self->det.cams[k], xw, uv, NULL) != MVT_OK) {
+                continue;
+            }
+            const mvt_real mu = (uv[0] + MVT_R(0.5)) / (mvt_real)img->scale;
+            const mvt_real mv = (uv[1] + MVT_R(0.5)) / (mvt_real)img->scale;
+            if (mu >= MVT_R(0.0) && mv >= MVT_R(0.0) && mu < (mvt_real)img->width && mv < (mvt_real)img->height) {
+                votes += img->d[(int)mv * img->width + (int)mu] > fg_level;
+            }
+        }
+        if (votes >= need) {
+            return xw[2];
+        }
+    }
+    return fallback;
+}
+
+static void exclusion_prior(mvt_pft_t *self, int ti)
+{
+    const mvt_pft_config_t *c = &self->cfg;
+    mvt_pf_pool_t *p = &self->targets[ti].pool;
+    for (int i = 0; i < p->n; i++) {
+        p->w[i] = MVT_R(0.0);
+    }
+    if (!(c->exclusion_m > MVT_R(0.0)) || !(c->exclusion_log > MVT_R(0.0))) {
+        return;
+    }
+    const mvt_real r2 = c->exclusion_m * c->exclusion_m;
+    for (int o = 0; o < MVT_MAX_TARGETS; o++) {
+        if (o == ti || self->targets[o].id == 0) {
+            continue;
+        }
+        const mvt_real *m = self->centre[o];
+        for (int i = 0; i < p->n; i++) {
+            const mvt_real dx = p->x[i] - m[0], dy = p->y[i] - m[1];
+            const mvt_real d2 = dx * dx + dy * dy;
+            if (d2 < r2) {
+                p->w[i] -= c->exclusion_log * (MVT_R(1.0) - d2 / r2);
+            }
+        }
+    }
+}
+
+static void delete_targets(mvt_pft_t *self, int64_t now_us)
+{
+    const mvt_pft_config_t *c = &self->cfg;
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        mvt_pft_target_t *a = &self->targets[t];
+        if (a->id == 0) {
+            continue;
+        }
+        if (mvt_us_to_s(now_us - a->last_supported_us) > c->lost_s) {
+            a->id = 0;
+            self->counters.deleted_lost++;
+            continue;
+        }
+        const mvt_real pos[3] = {a->est.mean[0], a->est.mean[1], a->est.head_z};
+        if (!mvt_trk_inside_volume(&c->det, pos)) {
+            a->id = 0;
+            self->counters.deleted_outside++;
+        }
+    }
+    const mvt_real d2max = c->dup_dist_m * c->dup_dist_m;
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        mvt_pft_target_t *a = &self->targets[t];
+        for (int u = t + 1; u < MVT_MAX_TARGETS && a->id != 0; u++) {
+            mvt_pft_target_t *b = &self->targets[u];
+            if (b->id == 0) {
+                continue;
+            }
+            const mvt_real dx = a->est.mean[0] - b->est.mean[0], dy = a->est.mean[1] - b->est.mean[1];
+            if (dx * dx + dy * dy < d2max) {
+                mvt_pft_target_t *younger = a->id > b->id ? a : b;
+                younger->id = 0;
+                self->counters.deleted_duplicate++;
+            }
+        }
+    }
+}
+
+static void output(const mvt_pft_t *self, int64_t utime_us, mvt_output_t *out)
+{
+    out->utime_us = utime_us;
+    out->num_tracks = 0;
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        const mvt_pft_target_t *a = &self->targets[t];
+        if (a->id == 0) {
+            continue;
+        }
+        mvt_track_out_t *o = &out->tracks[out->num_tracks++];
+        o->id = a->id;
+        o->status = a->status;
+        o->pos_m[0] = a->est.mean[0];
+        o->pos_m[1] = a->est.mean[1];
+        o->pos_m[2] = a->est.head_z;
+        memcpy(o->vel_ms, a->est.vel, sizeof(o->vel_ms));
+        memcpy(o->cov_m2, a->est.cov, sizeof(o->cov_m2));
+        memcpy(o->extent_min, a->est.box_min, sizeof(o->extent_min));
+        memcpy(o->extent_max, a->est.box_max, sizeof(o->extent_max));
+        o->cameras_used = a->cameras_used;
+        o->hue = self->cfg.use_colour ? a->est.hue : MVT_R(-1.0);
+        o->saturation = self->cfg.use_colour ? a->est.saturation : MVT_R(-1.0);
+    }
+}
+
+mvt_err_t mvt_pft_step(mvt_pft_t *self, const mvt_frame_t *frame, mvt_output_t *out)
+{
+    MVT_ASSERT(self != NULL && frame != NULL);
+    const mvt_pft_config_t *c = &self->cfg;
+    const int num_cams = self->det.num_cameras;
+    if (self->have_time && frame->utime_us < self->last_utime_us) {
+        self->counters.frames_time_backwards++;
+        return MVT_ERR_INVALID;
+    }
+    const mvt_real dt = self->have_time ? mvt_us_to_s(frame->utime_us - self->last_utime_us) : MVT_R(0.0);
+    self->last_utime_us = frame->utime_us;
+    self->have_time = 1;
+    self->counters.frames++;
+
+    int masks = 0, colour = 0;
+    for (int k = 0; k < num_cams; k++) {
+        const mvt_view_t *v = &frame->views[k];
+        const struct mvt_mask *m = v->observed ? v->mask : NULL;
+        if (v->observed && (m == NULL || m->width < 1)) {
+            self->counters.views_without_mask++;
+        }
+        mvt_pf_image_build(&self->images[k], m, &self->tab, c->model.sigma_px, &self->blur);
+        masks += self->images[k].width > 0;
+        colour += self->images[k].width > 0 && m->has_colour;
+    }
+    (void)colour;
+    (void)mvt_tracker_step(&self->det, frame, &self->det_out);
+
+    /* predicted centres for the exclusion prior (from last frame's estimates) */
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        const mvt_pft_target_t *a = &self->targets[t];
+        for (int i = 0; i < 3; i++) {
+            self->centre[t][i] = a->est.mean[i] + a->est.vel[i] * dt;
+        }
+    }
+    const int need = c->support_min_views < masks ? c->support_min_views : masks;
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        mvt_pft_target_t *a = &self->targets[t];
+        if (a->id == 0) {
+            continue;
+        }
+        mvt_pf_predict(&a->pool, dt, &c->noise, &self->rng);
+        exclusion_prior(self, t);
+        mvt_real on_fg[MVT_MAX_CAMERAS];
+        mvt_pf_weight(&a->pool, self->det.cams, self->fovs, self->images, num_cams, &self->tab, c->use_colour,
+                      c->lik_exponent, on_fg);
+        a->ess = mvt_pf_normalise(&a->pool);
+        if (!(a->ess > MVT_R(0.0))) {
+            self->counters.numeric_faults++;
+        }
+        mvt_pf_estimate(&a->pool, c->p_h, c->head_quantile, self->order, &a->est);
+        if (masks > 0) {
+            a->est.head_z = column_top(self, a->est.mean, a->est.head_z, masks);
+        }
+        a->cameras_used = 0u;
+        for (int k = 0; k < num_cams; k++) {
+            a->cameras_used |= on_fg[k] >= c->support_fraction && self->images[k].width > 0 ? 1u << k : 0u;
+        }
+        const int supported = masks > 0 && popcount(a->cameras_used) >= need;
+        a->status = supported ? MVT_TRACK_CONFIRMED : MVT_TRACK_COASTING;
+        if (supported) {
+            a->last_supported_us = frame->utime_us;
+        }
+        if (a->ess < c->ess_fraction * (mvt_real)a->pool.n) {
+            mvt_pf_resample(&a->pool, &self->rng, &self->scratch);
+            self->counters.resamples++;
+        }
+    }
+    delete_targets(self, frame->utime_us);
+
+    /* births from confirmed blob tracks that no particle target explains */
+    const mvt_real sep2 = c->birth_sep_m * c->birth_sep_m;
+    for (int i = 0; i < self->det_out.num_tracks && masks > 0; i++) {
+        const mvt_track_out_t *bt = &self->det_out.tracks[i];
+        if (bt->status != MVT_TRACK_CONFIRMED || bt->pos_m[2] < c->birth_min_height_m) {
+            continue;
+        }
+        int near = 0, free_slot = -1;
+        for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+            const mvt_pft_target_t *a = &self->targets[t];
+            if (a->id == 0) {
+                free_slot = free_slot < 0 ? t : free_slot;
+                continue;
+            }
+            const mvt_real dx = a->est.mean[0] - bt->pos_m[0], dy = a->est.mean[1] - bt->pos_m[1];
+            near |= dx * dx + dy * dy < sep2;
+        }
+        if (near) {
+            continue;
+        }
+        if (free_slot < 0) {
+            self->counters.births_refused_full++;
+            continue;
+        }
+        birth(self, &self->targets[free_slot], bt, frame->utime_us);
+    }
+    if (out != NULL) {
+        output(self, frame->utime_us, out);
+    }
+    return MVT_OK;
+}

@@ -1,0 +1,327 @@
+/* Particle filter: mask decoding (valid and hostile runs), likelihood images against a direct
+ * double-precision 2D convolution, weights, resampling, estimates, and the tracker end to end on
+ * painted masks (two people, reproducible with a seed). */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdlib.h>
+
+#include <cmocka.h>
+
+#include "mvt_pft.h"
+#include "test_support.h"
+
+static mvt_mask_t g_mask;
+
+static void test_mask_from_runs_valid_decodes(void **state)
+{
+    (void)state;
+    /* 8 x 2 mask for a 32 x 8 image (factor 4): rows 00111000 / 11000001 */
+    const int32_t runs[] = {2, 3, 3, 2, 5, 1};
+    uint8_t hue[16], sat[16];
+    for (int i = 0; i < 16; i++) hue[i] = (uint8_t)i, sat[i] = (uint8_t)(255 - i);
+    assert_int_equal(mvt_mask_from_runs(&g_mask, 32, 8, 8, 2, runs, 6, hue, sat, 16), MVT_OK);
+    const uint8_t want[16] = {0, 0, 1, 1, 1, 0, 0, 0, 1, 1, 0, 0, 0, 0, 0, 1};
+    assert_memory_equal(g_mask.fg, want, 16);
+    assert_int_equal(g_mask.scale, 4);
+    assert_int_equal(g_mask.num_fg, 6);
+    assert_true(g_mask.has_colour);
+    assert_int_equal(g_mask.hue[7], 7);
+    /* a first run of 0: starts with foreground */
+    const int32_t runs0[] = {0, 1, 15};
+    assert_int_equal(mvt_mask_from_runs(&g_mask, 8, 2, 8, 2, runs0, 3, NULL, NULL, 0), MVT_OK);
+    assert_int_equal(g_mask.fg[0], 1);
+    assert_int_equal(g_mask.num_fg, 1);
+    assert_false(g_mask.has_colour);
+}
+
+static void test_mask_from_runs_hostile_rejected(void **state)
+{
+    (void)state;
+    uint8_t hs[16] = {0};
+    const int32_t ok[] = {16};
+    const int32_t neg[] = {20, -4};
+    const int32_t short_[] = {10, 5};
+    const int32_t over[] = {10, 7};
+    const int32_t huge[] = {INT32_MAX, INT32_MAX, 16};
+    struct { int iw, ih, w, h; const int32_t *r; int n; const uint8_t *hue; int nhs; } cases[] = {
+        {32, 8, 8, 2, neg, 2, NULL, 0},      /* negative run */
+        {32, 8, 8, 2, short_, 2, NULL, 0},   /* runs sum below w * h */
+        {32, 8, 8, 2, over, 2, NULL, 0},     /* ... above */
+        {32, 8, 8, 2, huge, 3, NULL, 0},     /* overflow of a naive int sum */
+        {30, 8, 8, 2, ok, 1, NULL, 0},       /* image not a multiple of the mask */
+        {32, 4, 8, 2, ok, 1, NULL, 0},       /* unequal factors */
+        {32, 8, 8, 2, ok, 1, hs, 15},        /* hue/sat count neither 0 nor w * h */
+        {32, 8, 8, 2, ok, 1, NULL, 16},      /* count without arrays */
+        {32, 8, 8, 2, NULL, 1, NULL, 0},     /* runs NULL with a count */
+        {32, 8, 0, 2, ok, 1, NULL, 0},       /* zero size */
+        {32, 8, 8, 2, ok, -1, NULL, 0},      /* negative count */
+        {32767, 32767, 32767, 32767, ok, 1, NULL, 0}, /* over MVT_MAX_MASK_PIXELS */
+    };
+    for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
+        g_mask.width = 99;
+        const mvt_err_t e = mvt_mask_from_runs(&g_mask, cases[i].iw, cases[i].ih, cases[i].w, cases[i].h, cases[i].r,
+                                               cases[i].n, cases[i].hue, cases[i].hue, cases[i].nhs);
+        if (e != MVT_ERR_INVALID) fail_msg("case %zu accepted", i);
+        assert_int_equal(g_mask.width, 0);
+    }
+}
+
+static mvt_pf_image_t g_img;
+static mvt_pf_blur_ws_t g_ws;
+
+/* D against max(direct 2D discrete Gaussian convolution in double, p_B), zero outside. */
+static void check_image(int w, int h, int scale, double sigma_px, unsigned seed)
+{
+    srand(seed);
+    int32_t runs[4096];
+    int n = 0, total = 0, val = 0;
+    while (total < w * h && n < 4095) {
+        int len = val ? 1 + rand() % 12 : rand() % 40;
+        if (total + len > w * h) len = w * h - total;
+        runs[n++] = len;
+        total += len;
+        val ^= 1;
+    }
+    if (total < w * h) runs[n++] = w * h - total;
+    assert_int_equal(mvt_mask_from_runs(&g_mask, w * scale, h * scale, w, h, runs, n, NULL, NULL, 0), MVT_OK);
+    mvt_pf_model_t model = {(mvt_real)sigma_px, 0.2f, 0.05f, 0.1f, 0.1f, 0.1f};
+    mvt_pf_tables_t tab;
+    assert_int_equal(mvt_pf_tables_init(&tab, &model), MVT_OK);
+    mvt_pf_image_build(&g_img, &g_mask, &tab, (mvt_real)sigma_px, &g_ws);
+    const double s = sigma_px / scale;
+    const int r = (int)ceil(3 * s);
+    double norm = 0;
+    for (int dy = -r; dy <= r; dy++)
+        for (int dx = -r; dx <= r; dx++) norm += exp(-(dx * dx + dy * dy) / (2 * s * s));
+    double worst = 0;
+    for (int y = 0; y < h; y++) {
+        for (int x = 0; x < w; x++) {
+            double acc = 0;
+            for (int dy = -r; dy <= r; dy++)
+                for (int dx = -r; dx <= r; dx++) {
+                    const int u = x + dx, v = y + dy;
+                    if (u >= 0 && v >= 0 && u < w && v < h && g_mask.fg[v * w + u])
+                        acc += exp(-(dx * dx + dy * dy) / (2 * s * s));
+                }
+            const double want = fmax(acc / norm, 0.2);
+            const double got = g_img.d[y * w + x] / 255.0;
+            worst = fmax(worst, fabs(got - want));
+        }
+    }
+    if (worst > 1.0 / 255 + 1e-3) fail_msg("%dx%d scale %d: worst |D - reference| %.5f", w, h, scale, worst);
+}
+
+static void test_image_build_matches_direct_convolution(void **state)
+{
+    (void)state;
+    check_image(192, 144, 4, 4.0, 1);  /* the default: sigma 1 mask pixel */
+    check_image(96, 72, 8, 4.0, 2);    /* coarser mask: sigma 0.5 */
+    check_image(160, 120, 2, 4.0, 3);  /* finer mask: sigma 2 */
+    check_image(40, 30, 1, 6.0, 4);    /* full resolution, wider blur */
+}
+
+static mvt_pf_pool_t g_pool, g_scratch;
+
+static void test_normalise_matches_double_and_ess(void **state)
+{
+    (void)state;
+    g_pool.n = 500;
+    double ref[500], sum = 0;
+    for (int i = 0; i < 500; i++) {
+        g_pool.w[i] = (mvt_real)(-300.0 - 40.0 * sin(i * 0.37)); /* exp() of these underflows float */
+        ref[i] = exp(-40.0 * sin(i * 0.37) + 40.0);
+    }
+    for (int i = 0; i < 500; i++) sum += ref[i];
+    double sq = 0;
+    for (int i = 0; i < 500; i++) ref[i] /= sum, sq += ref[i] * ref[i];
+    const mvt_real ess = mvt_pf_normalise(&g_pool);
+    for (int i = 0; i < 500; i++) assert_true(fabs(g_pool.w[i] - ref[i]) < 1e-5 + 1e-4 * ref[i]);
+    assert_true(fabs(ess - 1.0 / sq) < 1e-3 / sq);
+    g_pool.w[3] = NAN;
+    assert_true(mvt_pf_normalise(&g_pool) == 0);
+    assert_true(fabs(g_pool.w[7] - 1.0 / 500) < 1e-9);
+}
+
+static void test_resample_systematic_copies_floor_or_ceil(void **state)
+{
+    (void)state;
+    mvt_rng_t rng;
+    mvt_rng_seed(&rng, 5, 1);
+    g_pool.n = 200;
+    double sum = 0;
+    for (int i = 0; i < 200; i++) {
+        g_pool.w[i] = (mvt_real)(1.0 + (i % 7) * (i % 3));
+        sum += g_pool.w[i];
+        g_pool.x[i] = (mvt_real)i;
+    }
+    double w[200];
+    for (int i = 0; i < 200; i++) g_pool.w[i] = (mvt_real)(g_pool.w[i] / sum), w[i] = g_pool.w[i];
+    mvt_pf_resample(&g_pool, &rng, &g_scratch);
+    int count[200] = {0};
+    for (int i = 0; i < 200; i++) count[(int)g_pool.x[i]]++;
+    for (int i = 0; i < 200; i++) {
+        const double e = 200 * w[i];
+        if (count[i] < floor(e) - 1e-6 - 1 || count[i] > ceil(e) + 1e-6) fail_msg("particle %d: %d copies for %.2f", i, count[i], e);
+        assert_true(fabs(g_pool.w[i] - 1.0 / 200) < 1e-9);
+    }
+}
+
+static void test_estimate_box_is_heaviest_set(void **state)
+{
+    (void)state;
+    g_pool.n = 100;
+    for (int i = 0; i < 100; i++) {
+        g_pool.x[i] = (mvt_real)i;
+        g_pool.y[i] = (mvt_real)(-i);
+        g_pool.z[i] = (mvt_real)(i % 10);
+        g_pool.vx[i] = g_pool.vy[i] = g_pool.vz[i] = 0;
+        g_pool.h[i] = 0.95f;
+        g_pool.s[i] = 0.5f;
+        g_pool.w[i] = i < 10 ? 0.096f : 0.04f / 90; /* the first 10 carry 0.96 */
+    }
+    uint16_t order[MVT_MAX_PARTICLES];
+    mvt_pf_estimate_t e;
+    mvt_pf_estimate(&g_pool, 0.95f, 0.97f, order, &e);
+    assert_int_equal(e.box_count, 10);
+    assert_true(e.box_min[0] == 0 && e.box_max[0] == 9 && e.box_min[1] == -9 && e.box_max[1] == 0);
+    assert_true(fabs(e.hue - 0.95) < 1e-4); /* circular mean near the wrap */
+    double mx = 0;
+    for (int i = 0; i < 100; i++) mx += g_pool.w[i] * i;
+    assert_true(fabs(e.mean[0] - mx) < 1e-3);
+}
+
+/* ---- the tracker on painted masks ---------------------------------------------------------- */
+
+static mvt_camera_t g_cams[5];
+static mvt_frame_t g_frame;
+static mvt_mask_t g_masks[5];
+static mvt_pft_t g_pft;
+static mvt_output_t g_out;
+
+static void paint(int k, const double head[3], uint8_t hue)
+{
+    mvt_mask_t *m = &g_masks[k];
+    for (int iz = 0; iz <= 40; iz++)
+        for (int ia = 0; ia < 24; ia++)
+            for (int ir = 0; ir <= 4; ir++) {
+                const double a = 6.283185307179586 * ia / 24, r = 0.05 * ir;
+                const mvt_real x[3] = {(mvt_real)(head[0] + r * cos(a)), (mvt_real)(head[1] + r * sin(a)),
+                                       (mvt_real)(head[2] * iz / 40.0)};
+                mvt_real uv[2];
+                if (mvt_cam_project(&g_cams[k], x, uv, NULL) != MVT_OK) continue;
+                const int u = (int)((uv[0] + 0.5f) / 4), v = (int)((uv[1] + 0.5f) / 4);
+                if (u < 0 || v < 0 || u >= 192 || v >= 144) continue;
+                m->fg[v * 192 + u] = 1;
+                m->hue[v * 192 + u] = hue;
+                m->sat[v * 192 + u] = 200;
+            }
+}
+
+/* Two people walking parallel 0.9 m apart; returns the worst horizontal error over the last 50 frames. */
+static double run_two(uint64_t seed, int frames, mvt_output_t *last)
+{
+    mvt_pft_config_t cfg;
+    mvt_pft_config_default(&cfg);
+    cfg.seed = seed;
+    cfg.num_particles = 400;
+    for (int i = 0; i < 3; i++) cfg.det.volume_min[i] = 0;
+    cfg.det.volume_max[0] = 6; cfg.det.volume_max[1] = 5; cfg.det.volume_max[2] = 2.5;
+    assert_int_equal(mvt_pft_init(&g_pft, &cfg, g_cams, 5), MVT_OK);
+    double worst = 0;
+    for (int f = 0; f < frames; f++) {
+        const double heads[2][3] = {{2.0 + 0.02 * f, 2.1, 1.70}, {2.0 + 0.02 * f, 3.0, 1.80}};
+        g_frame.utime_us = 1000000 + (int64_t)f * 40000;
+        for (int k = 0; k < 5; k++) {
+            mvt_mask_t *m = &g_masks[k];
+            m->width = 192; m->height = 144; m->scale = 4; m->has_colour = 1;
+            memset(m->fg, 0, 192 * 144);
+            memset(m->hue, 30, 192 * 144);
+            memset(m->sat, 20, 192 * 144);
+            mvt_view_t *v = &g_frame.views[k];
+            v->observed = 1;
+            v->utime_us = g_frame.utime_us;
+            v->num_detections = 0;
+            v->mask = m;
+            for (int p = 0; p < 2; p++) {
+                paint(k, heads[p], (uint8_t)(90 * p + 10));
+                const mvt_real hp[3] = {(mvt_real)heads[p][0], (mvt_real)heads[p][1], (mvt_real)heads[p][2]};
+                mvt_real uv[2];
+                if (mvt_cam_project(&g_cams[k], hp, uv, NULL) == MVT_OK) {
+                    mvt_detection_t *d = &v->det[v->num_detections++];
+                    memset(d, 0, sizeof(*d));
+                    d->u = uv[0]; d->v = uv[1]; d->sigma_px = 3; d->score = 1; d->hue = d->saturation = -1;
+                }
+            }
+        }
+        assert_int_equal(mvt_pft_step(&g_pft, &g_frame, last), MVT_OK);
+        if (f >= frames - 50) {
+            assert_int_equal(last->num_tracks, 2);
+            for (int t = 0; t < 2; t++) {
+                double best = 1e9;
+                for (int p = 0; p < 2; p++)
+                    best = fmin(best, hypot(last->tracks[t].pos_m[0] - heads[p][0], last->tracks[t].pos_m[1] - heads[p][1]));
+                worst = fmax(worst, best);
+            }
+        }
+    }
+    return worst;
+}
+
+static void test_pft_two_people_tracked_and_reproducible(void **state)
+{
+    (void)state;
+    assert_int_equal(test_room_cameras(g_cams, 1), 0);
+    static mvt_output_t a, b;
+    const double worst = run_two(7, 90, &a);
+    if (worst > 0.15) fail_msg("worst horizontal error %.3f m", worst);
+    assert_true(g_pft.counters.births == 2); /* no identity lost over 90 frames */
+    for (int t = 0; t < 2; t++) {         /* the volume is a body: about 0.4 m wide, floor to head */
+        assert_true(a.tracks[t].extent_max[0] - a.tracks[t].extent_min[0] < 0.8);
+        assert_true(a.tracks[t].extent_max[2] > 1.2 && a.tracks[t].extent_min[2] < 0.6);
+        assert_true(fabs(a.tracks[t].pos_m[2] - (a.tracks[t].pos_m[1] < 2.5 ? 1.70 : 1.80)) < 0.1);
+    }
+    run_two(7, 90, &b);
+    assert_memory_equal(&a, &b, sizeof(a)); /* same seed, same output, bit for bit */
+}
+
+static void test_pft_time_backwards_refused(void **state)
+{
+    (void)state;
+    const int64_t t = g_pft.last_utime_us;
+    g_frame.utime_us = t - 1;
+    assert_int_equal(mvt_pft_step(&g_pft, &g_frame, &g_out), MVT_ERR_INVALID);
+    assert_int_equal(g_pft.counters.frames_time_backwards, 1);
+}
+
+static void test_pft_config_invalid_rejected(void **state)
+{
+    (void)state;
+    mvt_pft_config_t cfg;
+    mvt_pft_config_default(&cfg);
+    cfg.num_particles = MVT_MAX_PARTICLES + 1;
+    assert_int_equal(mvt_pft_init(&g_pft, &cfg, g_cams, 5), MVT_ERR_INVALID);
+    mvt_pft_config_default(&cfg);
+    cfg.model.p_b = 1.5f;
+    assert_int_equal(mvt_pft_init(&g_pft, &cfg, g_cams, 5), MVT_ERR_INVALID);
+    mvt_pft_config_default(&cfg);
+    cfg.noise.z_renew = NAN;
+    assert_int_equal(mvt_pft_init(&g_pft, &cfg, g_cams, 5), MVT_ERR_INVALID);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_mask_from_runs_valid_decodes),
+        cmocka_unit_test(test_mask_from_runs_hostile_rejected),
+        cmocka_unit_test(test_image_build_matches_direct_convolution),
+        cmocka_unit_test(test_normalise_matches_double_and_ess),
+        cmocka_unit_test(test_resample_systematic_copies_floor_or_ceil),
+        cmocka_unit_test(test_estimate_box_is_heaviest_set),
+        cmocka_unit_test(test_pft_two_people_tracked_and_reproducible),
+        cmocka_unit_test(test_pft_time_backwards_refused),
+        cmocka_unit_test(test_pft_config_invalid_rejected),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
