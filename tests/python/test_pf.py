@@ -1,0 +1,107 @@
+"""mvtrackd --mode pf on rendered scenes: two people kept apart by colour, the output deterministic,
+hostile masks rejected and counted; the renderer's run-length encoding against a decoder."""
+from __future__ import annotations
+
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mvtrack_tools.crowd import DetectorModel, interaction_scene
+from mvtrack_tools.lcmio import LogWriter, mt, read_log
+from mvtrack_tools.mot import clear_mot, pair_frames
+from mvtrack_tools.render import Renderer, decode_runs, encode_runs, mask_frame, write_rendered
+from mvtrack_tools.rig import random_rig, smartroom
+
+
+def test_runs_roundtrip_random_masks():
+    rng = np.random.default_rng(3)
+    for shape in [(1, 1), (5, 7), (144, 192)]:
+        for p in (0.0, 0.1, 0.9, 1.0):
+            m = (rng.random(shape) < p).astype(np.uint8)
+            runs = encode_runs(m)
+            assert runs.sum() == m.size and (runs >= 0).all()
+            assert np.array_equal(decode_runs(runs, shape[1], shape[0]), m)
+
+
+def run(daemon: Path, rig: Path, log: Path, out: Path, *args: str) -> subprocess.CompletedProcess:
+    r = subprocess.run([str(daemon), "--rig", str(rig), "--in", f"file://{log}?speed=0", "--out",
+                        f"file://{out}?mode=w", *args], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    return r
+
+
+@pytest.mark.daemon
+def test_pf_interaction_two_identities_deterministic(daemon_path, tmp_path):
+    rig = smartroom()
+    rig.write(tmp_path / "rig.yaml")
+    scene = interaction_scene(rig, 200, 3, DetectorModel(dropout_cam=None))
+    log = tmp_path / "scene.lcm"
+    w = LogWriter(str(log))
+    write_rendered(w, scene, Renderer(rig, seed=3), 3, progress=False)
+    w.close()
+    outs = []
+    for i in range(2):
+        out = tmp_path / f"pf{i}.lcm"
+        run(daemon_path, tmp_path / "rig.yaml", log, out, "--mode", "pf", "--particles", "500")
+        outs.append(out)
+    gt = read_log(str(log), lambda c: c == "GROUND_TRUTH")
+    tr = read_log(str(outs[0]), lambda c: c in ("TRACKS", "MVTRACK_STATUS"))
+    m = clear_mot(pair_frames(gt, tr))
+    assert m.id_switches == 0 and m.mota > 0.9 and m.motp_mm < 150, m
+    b = read_log(str(outs[1]), lambda c: c == "TRACKS")
+    for u in tr.tracks:  # same log, same seed: the same tracks bit for bit
+        ta, tb = tr.tracks[u], b.tracks[u]
+        assert [(t.id, tuple(t.position), tuple(t.extent_max)) for t in ta] == \
+               [(t.id, tuple(t.position), tuple(t.extent_max)) for t in tb]
+    st = tr.status[-1]
+    assert st.mode == "pf" and st.masks_decoded > 0 and st.masks_rejected == 0
+    t = next(t for ts in tr.tracks.values() for t in ts if t.status == 2)
+    assert 0.0 <= t.hue < 1.0 and 0.0 <= t.saturation <= 1.0  # MS+C estimates appearance
+
+
+@pytest.mark.daemon
+def test_pf_hostile_masks_counted_never_fatal(daemon_path, tmp_path):
+    rig = random_rig(np.random.default_rng(11), 4)
+    rig.write(tmp_path / "rig.yaml")
+    rend = Renderer(rig, seed=1)
+    rng = np.random.default_rng(0)
+    log = tmp_path / "bad.lcm"
+    w = LogWriter(str(log))
+    c = 0.5 * (rig.volume_min + rig.volume_max)
+    head = np.array([c[0], c[1], 1.7])
+    bad = 0
+    for f in range(60):
+        for k, cam in enumerate(rig.cameras):
+            view = rend.render(k, [(1, head, 0)], rng)
+            msg = mask_frame(1_000_000 + f * 40_000, f, cam, view, rend.m.scale, 4.0)
+            kind = (f * len(rig.cameras) + k) % 7
+            if kind == 1:   # runs one short of the mask
+                msg.runs[-1] -= 1
+            elif kind == 2:  # negative run
+                msg.runs[0] = -5
+            elif kind == 3:  # hue/sat count not the mask size
+                msg.num_hs -= 1
+                msg.hue = msg.hue[:-1]
+                msg.saturation = msg.saturation[:-1]
+            elif kind == 4:  # mask size not an integer fraction of the image
+                msg.mask_width += 1
+            bad += kind in (1, 2, 3, 4)
+            w.write(msg.utime, f"DETECTIONS_{cam.name}", msg)
+    w.close()
+    out = tmp_path / "out.lcm"
+    run(daemon_path, tmp_path / "rig.yaml", log, out, "--mode", "pf")
+    tr = read_log(str(out), lambda c: c in ("TRACKS", "MVTRACK_STATUS"))
+    assert len(tr.tracks) == 60
+    assert tr.status[-1].masks_rejected == bad
+    assert tr.status[-1].masks_decoded == 60 * len(rig.cameras) - bad
+
+
+def test_pf_cli_rejects_bad_options(daemon_path, tmp_path):
+    smartroom().write(tmp_path / "rig.yaml")
+    for args in (["--particles", "5"], ["--particles", "x"], ["--exclusion", "-1"], ["--seed", "-3"],
+                 ["--publish-particles", "999999"]):
+        r = subprocess.run([str(daemon_path), "--rig", str(tmp_path / "rig.yaml"), "--mode", "pf", *args],
+                           capture_output=True, text=True, timeout=30)
+        assert r.returncode == 2 and "mvtrackd:" in r.stderr, args
