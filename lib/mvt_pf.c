@@ -251,8 +251,6 @@ void mvt_pf_weight(mvt_pf_pool_t *p, const mvt_camera_t *cams, const mvt_pf_fov_
         const mvt_pf_fov_t *f = &fovs[k];
         const int colour = use_colour && img->mask->has_colour;
         const mvt_real outside = tab->log_d[tab->d_floor] + (colour ? tab->log_colour_background : MVT_R(0.0));
-        const mvt_real inv_scale = MVT_R(1.0) / (mvt_real)img->scale;
-        const int w = img->width, hgt = img->height;
         const uint8_t *fg = img->mask->fg, *hue = img->mask->hue, *sat = img->mask->sat;
         int n_fg = 0;
         for (int i = 0; i < p->n; i++) {
@@ -267,9 +265,8 @@ void mvt_pf_weight(mvt_pf_pool_t *p, const mvt_camera_t *cams, const mvt_pf_fov_
                     mvt_cam_distort(c, xn, xd, NULL);
                     const mvt_real u = c->fx * xd[0] + c->skew * xd[1] + c->cx;
                     const mvt_real v = c->fy * xd[1] + c->cy;
-                    const mvt_real mu = (u + MVT_R(0.5)) * inv_scale, mv = (v + MVT_R(0.5)) * inv_scale;
-                    if (mu >= MVT_R(0.0) && mv >= MVT_R(0.0) && mu < (mvt_real)w && mv < (mvt_real)hgt) {
-                        const int idx = (int)mv * w + (int)mu;
+                    const int idx = mvt_pf_image_index(img, u, v);
+                    if (idx >= 0) {
                         const uint8_t l = img->d[idx];
                         lw = tab->log_d[l];
                         n_fg += l > fg_level;

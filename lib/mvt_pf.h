@@ -69,6 +69,16 @@ typedef struct mvt_pf_image {
     uint8_t d[MVT_MAX_MASK_PIXELS]; /* round(255 max(g * M, p_B)), row-major */
 } mvt_pf_image_t;
 
+/* Index of the mask pixel holding raw image pixel (u, v), or -1 outside the mask. O(1). */
+static inline int mvt_pf_image_index(const mvt_pf_image_t *img, mvt_real u, mvt_real v)
+{
+    const mvt_real mu = (u + MVT_R(0.5)) / (mvt_real)img->scale, mv = (v + MVT_R(0.5)) / (mvt_real)img->scale;
+    if (!(mu >= MVT_R(0.0) && mv >= MVT_R(0.0) && mu < (mvt_real)img->width && mv < (mvt_real)img->height)) {
+        return -1;
+    }
+    return (int)mv * img->width + (int)mu;
+}
+
 /* Blur workspace (shared by every camera, one at a time). */
 typedef struct mvt_pf_blur_ws {
     uint16_t h[MVT_MAX_MASK_PIXELS];   /* horizontal pass */

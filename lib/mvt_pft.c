@@ -128,13 +128,8 @@ static void birth(mvt_pft_t *self, mvt_pft_target_t *t, const mvt_track_out_t *s
             if (mvt_cam_project(&self->det.cams[k], xw, uv, NULL) != MVT_OK) {
                 continue;
             }
-            const mvt_real mu = (uv[0] + MVT_R(0.5)) / (mvt_real)img->scale;
-            const mvt_real mv = (uv[1] + MVT_R(0.5)) / (mvt_real)img->scale;
-            if (!(mu >= MVT_R(0.0) && mv >= MVT_R(0.0) && mu < (mvt_real)img->width && mv < (mvt_real)img->height)) {
-                continue;
-            }
-            const int idx = (int)mv * img->width + (int)mu;
-            if (!img->mask->fg[idx]) {
+            const int idx = mvt_pf_image_index(img, uv[0], uv[1]);
+            if (idx < 0 || !img->mask->fg[idx]) {
                 continue;
             }
             p->h[i] = ((mvt_real)img->mask->hue[idx] + mvt_rng_uniform(&self->rng)) / MVT_R(256.0);
@@ -167,11 +162,8 @@ static mvt_real column_top(const mvt_pft_t *self, const mvt_real xy[2], mvt_real
             if (img->width < 1 || mvt_cam_project(&self->det.cams[k], xw, uv, NULL) != MVT_OK) {
                 continue;
             }
-            const mvt_real mu = (uv[0] + MVT_R(0.5)) / (mvt_real)img->scale;
-            const mvt_real mv = (uv[1] + MVT_R(0.5)) / (mvt_real)img->scale;
-            if (mu >= MVT_R(0.0) && mv >= MVT_R(0.0) && mu < (mvt_real)img->width && mv < (mvt_real)img->height) {
-                votes += img->d[(int)mv * img->width + (int)mu] > fg_level;
-            }
+            const int idx = mvt_pf_image_index(img, uv[0], uv[1]);
+            votes += idx >= 0 && img->d[idx] > fg_level;
         }
         if (votes >= need) {
             return xw[2];
