@@ -2,6 +2,11 @@
 
 #include <string.h>
 
+static uint32_t all_cameras(const mvtd_asm_t *a)
+{
+    return a->num_cameras >= 32 ? 0xffffffffu : ((1u << a->num_cameras) - 1u);
+}
+
 void mvtd_asm_init(mvtd_asm_t *a, int num_cameras, double frame_rate_hz, mvtd_emit_fn emit, void *ctx)
 {
     memset(a, 0, sizeof(*a));
@@ -9,6 +14,7 @@ void mvtd_asm_init(mvtd_asm_t *a, int num_cameras, double frame_rate_hz, mvtd_em
     a->half_period_us = (int64_t)(0.5e6 / frame_rate_hz);
     a->emit = emit;
     a->ctx = ctx;
+    a->active = all_cameras(a);
 }
 
 static void emit_open(mvtd_asm_t *a)
@@ -16,19 +22,29 @@ static void emit_open(mvtd_asm_t *a)
     if (!a->open) {
         return;
     }
-    const uint32_t all = (a->num_cameras >= 32) ? 0xffffffffu : ((1u << a->num_cameras) - 1u);
-    const int complete = (a->present & all) == all;
+    const int complete = (a->present & all_cameras(a)) == all_cameras(a);
     int64_t t = a->ref_utime;
     for (int k = 0; k < a->num_cameras; k++) {
         a->frame.views[k].observed = (a->present >> k) & 1u;
         if (a->frame.views[k].observed) {
             t = a->frame.views[k].utime_us > t ? a->frame.views[k].utime_us : t;
-        } else {
-            a->counters.missing[k]++;
+            a->cam_absent_run[k] = 0;
+            continue;
+        }
+        a->counters.missing[k]++;
+        if (a->cam_absent_run[k] < 255) {
+            a->cam_absent_run[k]++;
+        }
+        if (a->cam_absent_run[k] >= MVTD_ASM_DOWN_SETS && ((a->active >> k) & 1u)) {
+            a->active &= ~(1u << k);
+            a->counters.went_down[k]++;
         }
     }
     if (a->have_closed && t < a->last_emitted_utime) {
         t = a->last_emitted_utime; /* never hand the tracker a time earlier than the last frame */
+    }
+    if (a->have_closed && t > a->last_emitted_utime + MVTD_ASM_JUMP_US) {
+        a->counters.time_gaps++;
     }
     a->frame.utime_us = t;
     if (complete) {
@@ -43,9 +59,35 @@ static void emit_open(mvtd_asm_t *a)
     a->emit(a->ctx, &a->frame, complete);
 }
 
+/* A message far behind the last set: a clock that went back, or one camera's wrong clock. */
+static int rebase_if_clock_jumped(mvtd_asm_t *a, int64_t u)
+{
+    if (!a->have_closed || u >= a->last_emitted_utime - MVTD_ASM_JUMP_US) {
+        a->far_behind = 0;
+        return 0;
+    }
+    if (++a->far_behind < a->num_cameras) {
+        return 0;
+    }
+    emit_open(a);
+    a->offset_us += a->last_emitted_utime + 2 * a->half_period_us - u;
+    a->far_behind = 0;
+    memset(a->cam_seen, 0, sizeof(a->cam_seen));
+    a->counters.clock_jumps++;
+    return 1;
+}
+
 mvtd_asm_result_t mvtd_asm_add(mvtd_asm_t *a, int cam, const mvt_view_t *view, double wall_s)
 {
-    const int64_t u = view->utime_us;
+    if (!((a->active >> cam) & 1u)) {
+        a->active |= 1u << cam; /* back: wait for it again from the next set */
+        a->cam_absent_run[cam] = 0;
+        a->counters.came_back[cam]++;
+    }
+    int64_t u = view->utime_us + a->offset_us;
+    if (rebase_if_clock_jumped(a, u)) {
+        u = view->utime_us + a->offset_us;
+    }
     if (a->cam_seen[cam] && u <= a->cam_last_utime[cam]) {
         if (u == a->cam_last_utime[cam]) {
             a->counters.duplicate++;
@@ -78,8 +120,8 @@ mvtd_asm_result_t mvtd_asm_add(mvtd_asm_t *a, int cam, const mvt_view_t *view, d
     a->cam_last_utime[cam] = u;
     a->present |= 1u << cam;
     a->frame.views[cam] = *view;
-    const uint32_t all = (a->num_cameras >= 32) ? 0xffffffffu : ((1u << a->num_cameras) - 1u);
-    if ((a->present & all) == all) {
+    a->frame.views[cam].utime_us = u;
+    if ((a->present & a->active) == a->active) {
         emit_open(a);
     }
     return MVTD_ASM_ACCEPTED;

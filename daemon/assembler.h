@@ -2,16 +2,30 @@
  * assembler.h - groups per-camera messages into frame sets for the tracker.
  *
  * A frame set collects messages whose capture times lie within half a frame period of the first
- * message of the set. It is emitted (in this order of precedence) when every rig camera has
+ * message of the set. It is emitted (in this order of precedence) when every active camera has
  * reported, when a message of a later frame proves it complete, when a wall-clock deadline passes
  * (live mode only: mvtd_asm_poll), or at the end of input (mvtd_asm_flush). Only message times
- * decide, except the live deadline. Late, duplicate and time-reversed messages are counted and
- * dropped. No allocation; one frame set is open at a time.
+ * and their order decide, except the live deadline. No allocation; one frame set is open at a time.
+ *
+ * Cameras that stop: a camera absent from MVTD_ASM_DOWN_SETS consecutive sets is "down" and no
+ * longer waited for, so a dead camera costs the deadline once, not every frame; its next message
+ * makes it active again.
+ *
+ * Time: late, duplicate and time-reversed messages are counted and dropped. When the capture
+ * clock itself jumps back (MVTD_ASM_JUMP_US or more behind the last emitted set, from as many
+ * consecutive messages as there are cameras, so one camera with a wrong clock cannot cause it),
+ * the assembler re-bases: from then on it adds offset_us to every message time, so the tracker
+ * sees time continue one frame later and keeps its tracks. Publish capture times as
+ * frame time - offset_us. A forward jump is real elapsed time to the tracker (tracks coast and
+ * are deleted as if the room had been unwatched); it is counted as a time gap.
  */
 #ifndef MVTD_ASSEMBLER_H
 #define MVTD_ASSEMBLER_H
 
 #include "mvt_tracker.h"
+
+#define MVTD_ASM_DOWN_SETS 2
+#define MVTD_ASM_JUMP_US 2000000
 
 typedef void (*mvtd_emit_fn)(void *ctx, mvt_frame_t *frame, int complete);
 
@@ -25,7 +39,11 @@ typedef enum mvtd_asm_result {
 typedef struct mvtd_asm_counters {
     uint64_t sets_complete, sets_partial;
     uint64_t late, duplicate, backwards;
+    uint64_t clock_jumps;               /* re-basings after the capture clock went back */
+    uint64_t time_gaps;                 /* sets more than MVTD_ASM_JUMP_US after the previous one */
     uint64_t missing[MVT_MAX_CAMERAS];  /* sets emitted without camera k */
+    uint64_t went_down[MVT_MAX_CAMERAS];
+    uint64_t came_back[MVT_MAX_CAMERAS];
 } mvtd_asm_counters_t;
 
 typedef struct mvtd_asm {
@@ -36,12 +54,16 @@ typedef struct mvtd_asm {
     int open;
     int64_t ref_utime;          /* first message of the open set */
     uint32_t present;
+    uint32_t active;            /* cameras a set waits for */
     double open_wall_s;         /* wall time the open set received its first message */
     int have_closed;
     int64_t last_closed_ref;
     int64_t last_emitted_utime;
+    int64_t offset_us;          /* added to message times since the last backward clock jump */
+    int far_behind;             /* consecutive messages MVTD_ASM_JUMP_US behind the last set */
     int64_t cam_last_utime[MVT_MAX_CAMERAS];
     uint8_t cam_seen[MVT_MAX_CAMERAS];
+    uint8_t cam_absent_run[MVT_MAX_CAMERAS];
     mvtd_asm_counters_t counters;
     mvt_frame_t frame;
 } mvtd_asm_t;

@@ -101,6 +101,76 @@ static void test_mvtd_asm_poll_deadline_emits_open_set(void **state)
     assert_int_equal(g_emitted, 1);
 }
 
+static void test_mvtd_asm_add_dead_camera_not_waited_for_then_back(void **state)
+{
+    (void)state;
+    setup_asm(3);
+    for (int f = 0; f < 2; f++) { /* camera 2 silent for two sets: each closed by the next frame */
+        add(0, 1000000 + f * 40000, 0);
+        add(1, 1000000 + f * 40000, 0);
+    }
+    add(0, 1080000, 0);
+    assert_int_equal(g_emitted, 2);
+    assert_int_equal(g_asm.counters.went_down[2], 1);
+    assert_int_equal(g_asm.active, 3u);
+    /* camera 2 down: cameras 0 and 1 alone complete a set at once, no waiting */
+    add(1, 1080000, 0);
+    assert_int_equal(g_emitted, 3);
+    assert_int_equal(g_observed, 3);
+    /* camera 2 returns (late for the emitted set): counted, and waited for from the next set */
+    assert_int_equal(add(2, 1080000, 0), MVTD_ASM_LATE);
+    assert_int_equal(g_asm.counters.came_back[2], 1);
+    add(0, 1120000, 0);
+    add(1, 1120000, 0);
+    assert_int_equal(g_emitted, 3);
+    assert_int_equal(add(2, 1120000, 0), MVTD_ASM_ACCEPTED);
+    assert_int_equal(g_emitted, 4);
+    assert_int_equal(g_complete, 1);
+}
+
+static void test_mvtd_asm_add_clock_jump_back_rebases_time(void **state)
+{
+    (void)state;
+    setup_asm(2);
+    for (int f = 0; f < 3; f++) {
+        add(0, 500000000 + f * 40000, 0);
+        add(1, 500000000 + f * 40000, 0);
+    }
+    assert_int_equal(g_emitted, 3);
+    assert_int_equal(g_utime, 500080000);
+    /* the shared capture clock restarts near zero: the first message alone is only counted */
+    assert_int_equal(add(0, 1000, 0), MVTD_ASM_BACKWARDS);
+    assert_int_equal(add(1, 1000, 0), MVTD_ASM_ACCEPTED); /* second camera agrees: re-base */
+    assert_int_equal(g_asm.counters.clock_jumps, 1);
+    assert_int_equal(add(0, 41000, 0), MVTD_ASM_ACCEPTED);
+    assert_int_equal(add(1, 41000, 0), MVTD_ASM_ACCEPTED);
+    /* the tracker sees time go on frame by frame; capture time = frame time - offset */
+    assert_int_equal(g_utime, 500080000 + 40000 + 40000);
+    assert_int_equal(g_utime - g_asm.offset_us, 41000);
+    assert_int_equal(g_asm.counters.time_gaps, 0);
+}
+
+static void test_mvtd_asm_add_one_wrong_clock_never_rebases(void **state)
+{
+    (void)state;
+    setup_asm(3);
+    for (int f = 0; f < 20; f++) {
+        const int64_t t = 500000000 + f * 40000;
+        add(0, t, 0);
+        add(1, t, 0);
+        const mvtd_asm_result_t r = add(2, f < 2 ? t : 1000 + f * 40000, 0); /* camera 2's clock resets */
+        assert_true(f < 2 ? r == MVTD_ASM_ACCEPTED : r == MVTD_ASM_BACKWARDS);
+    }
+    assert_int_equal(g_asm.counters.clock_jumps, 0);
+    assert_int_equal(g_asm.offset_us, 0);
+    assert_int_equal(g_asm.counters.backwards, 18);
+    /* forward jump of everyone: real elapsed time, counted as a gap */
+    add(0, 600000000, 0);
+    add(1, 600000000, 0);
+    add(0, 600040000, 0);
+    assert_int_equal(g_asm.counters.time_gaps, 1);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -108,6 +178,9 @@ int main(void)
         cmocka_unit_test(test_mvtd_asm_add_later_frame_proves_partial_set),
         cmocka_unit_test(test_mvtd_asm_add_duplicate_and_backwards_refused),
         cmocka_unit_test(test_mvtd_asm_poll_deadline_emits_open_set),
+        cmocka_unit_test(test_mvtd_asm_add_dead_camera_not_waited_for_then_back),
+        cmocka_unit_test(test_mvtd_asm_add_clock_jump_back_rebases_time),
+        cmocka_unit_test(test_mvtd_asm_add_one_wrong_clock_never_rebases),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -1,0 +1,94 @@
+/*
+ * mvtd.h - the daemon's engine: configuration from the command line, LCM message handling,
+ * frame assembly, tracking, publication and status. mvtrackd.c is its main(); the fuzzer, the
+ * soak and the tests drive the same engine without sockets (lcm_out NULL: messages are encoded,
+ * not sent).
+ */
+#ifndef MVTD_H
+#define MVTD_H
+
+#include <stdint.h>
+
+#include <lcm/lcm.h>
+
+#include "assembler.h"
+#include "mvt_pft.h"
+#include "mvt_tracker.h"
+#include "rig.h"
+
+#define MVTD_DEFAULT_URL "udpm://239.255.76.67:7667?ttl=0"
+#define MVTD_PROC_RING 512
+/* Detections of one message examined before the core chooses MVT_MAX_DETECTIONS of them. */
+#define MVTD_MAX_INPUT_DETECTIONS 4096
+#define MVTD_CONTINUE (-1)
+
+enum mvtd_log_class {
+    MVTD_LOG_UNDECODABLE, MVTD_LOG_UNKNOWN_CAMERA, MVTD_LOG_BAD_VALUE, MVTD_LOG_CAPACITY, MVTD_LOG_TIME,
+    MVTD_LOG_TRACKER, MVTD_LOG_CAMERA, MVTD_LOG_NCLASS
+};
+
+typedef struct mvtd {
+    const char *mode_name;
+    const char *in_url, *out_url;
+    double deadline_s;
+    mvtd_rig_t rig;
+    int pf;                    /* particle-filter mode: pft runs, tracker is unused */
+    mvt_tracker_t tracker;
+    mvt_pft_t *pft;
+    const mvt_tracker_t *trk;  /* the blob-level tracker in use (status, detection selection) */
+    int publish_particles;     /* particles per target on MVTRACK_PARTICLES, 0: none */
+    int64_t masks_decoded, masks_rejected;
+    mvtd_asm_t assembler;
+    mvt_output_t output;
+    lcm_t *lcm_in;
+    lcm_t *lcm_out;            /* NULL: encode what would be published, send nothing */
+    int offline;
+    int verbose;
+    int quiet;                 /* no stderr lines (fuzzing) */
+    double start_wall_s;
+    int64_t frames_processed;
+    int64_t frames_at_last_status;
+    int64_t bytes_encoded;     /* lcm_out NULL: size of what would have been published */
+    /* rejected input by reason (never reset) */
+    int64_t rej_undecodable, rej_unknown_camera, rej_bad_value, rej_over_capacity, rej_time_backwards, rej_late,
+        rej_duplicate;
+    int64_t cam_messages[MVT_MAX_CAMERAS];
+    int64_t cam_messages_at_last_status[MVT_MAX_CAMERAS];
+    int64_t cam_last_frame[MVT_MAX_CAMERAS];
+    int64_t cam_counter_restarts[MVT_MAX_CAMERAS];
+    double cam_last_wall_s[MVT_MAX_CAMERAS];
+    double last_status_wall_s;
+    double last_accept_wall_s;
+    float proc_ms[MVTD_PROC_RING];
+    float latency_ms[MVTD_PROC_RING];
+    int n_proc;
+    double log_last_s[MVTD_LOG_NCLASS];
+    int64_t log_suppressed[MVTD_LOG_NCLASS];
+    uint64_t tracker_births_full_seen;
+    uint64_t went_down_seen[MVT_MAX_CAMERAS], came_back_seen[MVT_MAX_CAMERAS], clock_jumps_seen;
+    mvt_view_t scratch_view;
+    mvt_detection_t input_dets[MVTD_MAX_INPUT_DETECTIONS];
+} mvtd_t;
+
+/* Parses the command line, loads the rig and initialises the tracker. Returns MVTD_CONTINUE, or
+ * the exit status (0 after --help, 2 on bad arguments or rig) having printed why. No LCM yet. */
+int mvtd_configure(mvtd_t *d, int argc, char **argv);
+
+/* Opens the LCM URLs and subscribes. Returns MVTD_CONTINUE or exit status 1. */
+int mvtd_open(mvtd_t *d);
+
+/* Runs until SIGINT/SIGTERM (live) or the end of the log (file://); returns the exit status. */
+int mvtd_run(mvtd_t *d);
+
+/* One message as LCM would deliver it on channel (the handler of DETECTIONS_.*). */
+void mvtd_handle(mvtd_t *d, const char *channel, const void *data, uint32_t size);
+
+/* Live mode housekeeping at wall time now: the open set's deadline, the status period. */
+void mvtd_tick(mvtd_t *d);
+
+/* Processes the frame set in hand, publishes the final status, closes LCM. */
+void mvtd_finish(mvtd_t *d);
+
+void mvtd_publish_status(mvtd_t *d);
+
+#endif /* MVTD_H */
