@@ -338,10 +338,84 @@ static const mvt_mask_t *decode_mask(daemon_state_t *d, int cam, const mvtrack_c
     return mask;
 }
 
+/* Big-endian wire reader over an untrusted buffer: every read checks the bytes are there. */
+typedef struct wire {
+    const uint8_t *p;
+    uint32_t left;
+} wire_t;
+
+static int wire_skip(wire_t *w, uint64_t n)
+{
+    if (n > w->left) {
+        return -1;
+    }
+    w->p += n;
+    w->left -= (uint32_t)n;
+    return 0;
+}
+
+static int wire_int(wire_t *w, int bytes, int64_t *out)
+{
+    if ((uint32_t)bytes > w->left) {
+        return -1;
+    }
+    uint64_t v = 0;
+    for (int i = 0; i < bytes; i++) {
+        v = (v << 8) | w->p[i];
+    }
+    const uint64_t sign = 1ull << (8 * bytes - 1);
+    *out = (int64_t)((v ^ sign) - sign); /* sign-extend */
+    w->p += bytes;
+    w->left -= (uint32_t)bytes;
+    return 0;
+}
+
+/* Walks a camera_frame_t message as laid out on the wire (lcmtypes/camera_frame_t.lcm) and checks
+ * that every count is non-negative and every array, and the camera string with its terminating
+ * NUL, lies inside the message. lcm-gen's decoder trusts the counts (it allocates what they say
+ * before checking the bytes exist, leaks what it allocated when a later field fails, and leaves a
+ * string of length 0 or without its NUL unterminated), so it only ever sees messages that passed
+ * this: what it allocates is then bounded by the message's own size. */
+int mvtd_frame_wire_check(const void *data, uint32_t size)
+{
+    wire_t w = {data, size};
+    int64_t v, n;
+    const int ints[] = {8, 8, 8}; /* hash, utime, frame */
+    for (int i = 0; i < 3; i++) {
+        if (wire_int(&w, ints[i], &v) != 0) {
+            return -1;
+        }
+    }
+    if (wire_int(&w, 4, &n) != 0 || n < 1 || n > (int64_t)w.left || w.p[n - 1] != 0 || wire_skip(&w, (uint64_t)n) != 0) {
+        return -1; /* camera name: length with its NUL, and the NUL present */
+    }
+    if (wire_int(&w, 2, &v) != 0 || wire_int(&w, 2, &v) != 0 || wire_int(&w, 2, &n) != 0 || n < 0 ||
+        wire_skip(&w, (uint64_t)n * 10u * 4u) != 0) {
+        return -1; /* width, height, detections of 10 floats each */
+    }
+    if (wire_int(&w, 2, &v) != 0 || wire_int(&w, 2, &v) != 0 || wire_int(&w, 4, &n) != 0 || n < 0 ||
+        wire_skip(&w, (uint64_t)n * 4u) != 0) {
+        return -1; /* mask size, runs */
+    }
+    if (wire_int(&w, 4, &n) != 0 || n < 0 || wire_skip(&w, (uint64_t)n * 2u) != 0) {
+        return -1; /* hue and saturation bytes */
+    }
+    return 0;
+}
+
 void mvtd_handle(daemon_state_t *d, const char *channel, const void *data, uint32_t size)
 {
     mvtrack_camera_frame_t m;
-    if (size > (uint32_t)INT32_MAX || mvtrack_camera_frame_t_decode(data, 0, (int)size, &m) < 0) {
+    memset(&m, 0, sizeof(m));
+    if (size > (uint32_t)INT32_MAX || mvtd_frame_wire_check(data, size) != 0 ||
+        mvtrack_camera_frame_t_decode(data, 0, (int)size, &m) < 0) {
+        /* (a decode failure after the wire check would be an LCM change: free what it allocated;
+         * fields it never reached are still NULL from the memset) */
+        free(m.camera);
+        free(m.detections);
+        free(m.runs);
+        free(m.hue);
+        free(m.saturation);
         d->rej_undecodable++;
         log_limited(d, MVTD_LOG_UNDECODABLE, "undecodable message on %s (%u bytes) skipped", channel,
                     (unsigned)size);
