@@ -43,9 +43,6 @@ static void emit_open(mvtd_asm_t *a)
     if (a->have_closed && t < a->last_emitted_utime) {
         t = a->last_emitted_utime; /* never hand the tracker a time earlier than the last frame */
     }
-    if (a->have_closed && t > a->last_emitted_utime + MVTD_ASM_JUMP_US) {
-        a->counters.time_gaps++;
-    }
     a->frame.utime_us = t;
     if (complete) {
         a->counters.sets_complete++;
@@ -59,33 +56,52 @@ static void emit_open(mvtd_asm_t *a)
     a->emit(a->ctx, &a->frame, complete);
 }
 
-/* A message far behind the last set: a clock that went back, or one camera's wrong clock. */
+/* A message MVTD_ASM_JUMP_US or more behind or ahead of the last set: the capture clock jumped,
+ * or one camera's clock is wrong. Returns 0 (normal), -1/+1 (refused: not yet agreed) or 2
+ * (re-based: the caller recomputes the message time). */
 static int rebase_if_clock_jumped(mvtd_asm_t *a, int64_t u)
 {
-    if (!a->have_closed || u >= a->last_emitted_utime - MVTD_ASM_JUMP_US) {
-        a->far_behind = 0;
+    const int64_t ref = a->open ? a->ref_utime : a->last_emitted_utime;
+    const int dir = !a->open && !a->have_closed    ? 0
+                    : u < ref - MVTD_ASM_JUMP_US ? -1
+                    : u > ref + MVTD_ASM_JUMP_US ? 1
+                                                 : 0;
+    if (dir == 0) {
+        a->far_run = 0;
         return 0;
     }
-    if (++a->far_behind < a->num_cameras) {
-        return 0;
+    if (dir != a->far_dir) {
+        a->far_dir = dir;
+        a->far_run = 0;
+    }
+    if (++a->far_run < a->num_cameras) {
+        return dir;
     }
     emit_open(a);
-    a->offset_us += a->last_emitted_utime + 2 * a->half_period_us - u;
-    a->far_behind = 0;
+    const int64_t target = dir < 0 ? a->last_emitted_utime + 2 * a->half_period_us
+                                   : a->last_emitted_utime + (u - a->last_emitted_utime < MVTD_ASM_MAX_GAP_US
+                                                                  ? u - a->last_emitted_utime
+                                                                  : MVTD_ASM_MAX_GAP_US);
+    a->offset_us += target - u;
+    a->far_run = 0;
     memset(a->cam_seen, 0, sizeof(a->cam_seen));
-    a->counters.clock_jumps++;
-    return 1;
+    if (dir < 0) {
+        a->counters.clock_jumps++;
+    } else {
+        a->counters.time_gaps++;
+    }
+    return 2;
 }
 
 mvtd_asm_result_t mvtd_asm_add(mvtd_asm_t *a, int cam, const mvt_view_t *view, double wall_s)
 {
-    if (!((a->active >> cam) & 1u)) {
-        a->active |= 1u << cam; /* back: wait for it again from the next set */
-        a->cam_absent_run[cam] = 0;
-        a->counters.came_back[cam]++;
-    }
     int64_t u = view->utime_us + a->offset_us;
-    if (rebase_if_clock_jumped(a, u)) {
+    const int jump = rebase_if_clock_jumped(a, u);
+    if (jump == -1 || jump == 1) {
+        a->counters.far[jump > 0]++;
+        return jump < 0 ? MVTD_ASM_BACKWARDS : MVTD_ASM_AHEAD;
+    }
+    if (jump == 2) {
         u = view->utime_us + a->offset_us;
     }
     if (a->cam_seen[cam] && u <= a->cam_last_utime[cam]) {
@@ -98,6 +114,11 @@ mvtd_asm_result_t mvtd_asm_add(mvtd_asm_t *a, int cam, const mvt_view_t *view, d
     }
     if (a->open && u > a->ref_utime + a->half_period_us) {
         emit_open(a); /* a later frame proves the open set complete */
+    }
+    if (!((a->active >> cam) & 1u)) { /* a plausible time from a camera that was down */
+        a->active |= 1u << cam;           /* back: waited for again (from the next set if late) */
+        a->cam_absent_run[cam] = 0;
+        a->counters.came_back[cam]++;
     }
     if (!a->open) {
         if (a->have_closed && u <= a->last_closed_ref + a->half_period_us) {

@@ -11,13 +11,18 @@
  * longer waited for, so a dead camera costs the deadline once, not every frame; its next message
  * makes it active again.
  *
- * Time: late, duplicate and time-reversed messages are counted and dropped. When the capture
- * clock itself jumps back (MVTD_ASM_JUMP_US or more behind the last emitted set, from as many
- * consecutive messages as there are cameras, so one camera with a wrong clock cannot cause it),
- * the assembler re-bases: from then on it adds offset_us to every message time, so the tracker
- * sees time continue one frame later and keeps its tracks. Publish capture times as
- * frame time - offset_us. A forward jump is real elapsed time to the tracker (tracks coast and
- * are deleted as if the room had been unwatched); it is counted as a time gap.
+ * Time: late, duplicate and time-reversed messages are counted and dropped. A message
+ * MVTD_ASM_JUMP_US or more behind or ahead of the last emitted set is refused (counted) unless as
+ * many consecutive messages as there are cameras agree, so one camera with a wrong clock can
+ * neither stall the others nor drag the time base. When they agree, the capture clock jumped: the
+ * assembler re-bases, adding offset_us to every message time from then on. After a jump back the
+ * tracker sees time continue one frame later and keeps its tracks; after a jump ahead it sees the
+ * gap, capped at MVTD_ASM_MAX_GAP_US (longer than any track coasts: the room was unwatched).
+ * Publish capture times as frame time - offset_us.
+ *
+ * Bounds: the caller keeps message times in 0..2^60 us. Tracker time then starts below 2^60 and
+ * grows by less than MVTD_ASM_MAX_GAP_US per frame set, whatever the input: no int64 overflow
+ * for over a century of frame sets at 25 Hz.
  */
 #ifndef MVTD_ASSEMBLER_H
 #define MVTD_ASSEMBLER_H
@@ -26,6 +31,7 @@
 
 #define MVTD_ASM_DOWN_SETS 2
 #define MVTD_ASM_JUMP_US 2000000
+#define MVTD_ASM_MAX_GAP_US 60000000
 
 typedef void (*mvtd_emit_fn)(void *ctx, mvt_frame_t *frame, int complete);
 
@@ -33,14 +39,16 @@ typedef enum mvtd_asm_result {
     MVTD_ASM_ACCEPTED = 0,
     MVTD_ASM_LATE = 1,       /* its frame set was already emitted */
     MVTD_ASM_DUPLICATE = 2,  /* the camera already reported in the open set */
-    MVTD_ASM_BACKWARDS = 3   /* older than the camera's previous message */
+    MVTD_ASM_BACKWARDS = 3,  /* older than the camera's previous message, or far behind the last set */
+    MVTD_ASM_AHEAD = 4       /* far ahead of the last set, other cameras not (yet) agreeing */
 } mvtd_asm_result_t;
 
 typedef struct mvtd_asm_counters {
     uint64_t sets_complete, sets_partial;
     uint64_t late, duplicate, backwards;
     uint64_t clock_jumps;               /* re-basings after the capture clock went back */
-    uint64_t time_gaps;                 /* sets more than MVTD_ASM_JUMP_US after the previous one */
+    uint64_t time_gaps;                 /* re-basings after it jumped ahead */
+    uint64_t far[2];                    /* messages refused far behind [0] / ahead [1] */
     uint64_t missing[MVT_MAX_CAMERAS];  /* sets emitted without camera k */
     uint64_t went_down[MVT_MAX_CAMERAS];
     uint64_t came_back[MVT_MAX_CAMERAS];
@@ -60,7 +68,7 @@ typedef struct mvtd_asm {
     int64_t last_closed_ref;
     int64_t last_emitted_utime;
     int64_t offset_us;          /* added to message times since the last backward clock jump */
-    int far_behind;             /* consecutive messages MVTD_ASM_JUMP_US behind the last set */
+    int far_dir, far_run;       /* consecutive messages MVTD_ASM_JUMP_US behind (-1) / ahead (+1) */
     int64_t cam_last_utime[MVT_MAX_CAMERAS];
     uint8_t cam_seen[MVT_MAX_CAMERAS];
     uint8_t cam_absent_run[MVT_MAX_CAMERAS];

@@ -133,6 +133,7 @@ void mvtd_publish_status(daemon_state_t *d)
                             (int64_t)d->trk->counters.detections_undistort_failed;
     st.rejected_over_capacity = d->rej_over_capacity;
     st.rejected_time_backwards = d->rej_time_backwards;
+    st.rejected_time_ahead = d->rej_time_ahead;
     st.rejected_late = d->rej_late;
     st.rejected_duplicate = d->rej_duplicate;
     float tmp[MVTD_PROC_RING];
@@ -370,9 +371,9 @@ static int wire_int(wire_t *w, int bytes, int64_t *out)
     return 0;
 }
 
-/* Walks a camera_frame_t message as laid out on the wire (lcmtypes/camera_frame_t.lcm) and checks
- * that every count is non-negative and every array, and the camera string with its terminating
- * NUL, lies inside the message. lcm-gen's decoder trusts the counts (it allocates what they say
+/* Walks a camera_frame_t message as laid out on the wire (lcmtypes/camera_frame_t.lcm): checks the
+ * fingerprint, that every count is non-negative, and that every array, and the camera string with
+ * its terminating NUL, lies inside the message. lcm-gen's decoder trusts the counts (it allocates what they say
  * before checking the bytes exist, leaks what it allocated when a later field fails, and leaves a
  * string of length 0 or without its NUL unterminated), so it only ever sees messages that passed
  * this: what it allocates is then bounded by the message's own size. */
@@ -380,11 +381,9 @@ int mvtd_frame_wire_check(const void *data, uint32_t size)
 {
     wire_t w = {data, size};
     int64_t v, n;
-    const int ints[] = {8, 8, 8}; /* hash, utime, frame */
-    for (int i = 0; i < 3; i++) {
-        if (wire_int(&w, ints[i], &v) != 0) {
-            return -1;
-        }
+    if (wire_int(&w, 8, &v) != 0 || v != __mvtrack_camera_frame_t_get_hash() || wire_int(&w, 8, &v) != 0 ||
+        wire_int(&w, 8, &v) != 0) {
+        return -1; /* fingerprint, utime, frame */
     }
     if (wire_int(&w, 4, &n) != 0 || n < 1 || n > (int64_t)w.left || w.p[n - 1] != 0 || wire_skip(&w, (uint64_t)n) != 0) {
         return -1; /* camera name: length with its NUL, and the NUL present */
@@ -426,6 +425,13 @@ void mvtd_handle(daemon_state_t *d, const char *channel, const void *data, uint3
         d->rej_unknown_camera++;
         log_limited(d, MVTD_LOG_UNKNOWN_CAMERA, "message on %s names camera '%s', not in the rig: skipped", channel,
                     m.camera != NULL ? m.camera : "");
+        mvtrack_camera_frame_t_decode_cleanup(&m);
+        return;
+    }
+    if (m.utime < 0 || m.utime > MVTD_MAX_UTIME) {
+        d->rej_bad_value++; /* time arithmetic (offsets, frame periods) stays far from overflow */
+        log_limited(d, MVTD_LOG_BAD_VALUE, "camera %s: utime %lld outside 0..2^60 us: skipped", d->rig.names[cam],
+                    (long long)m.utime);
         mvtrack_camera_frame_t_decode_cleanup(&m);
         return;
     }
@@ -511,6 +517,13 @@ void mvtd_handle(daemon_state_t *d, const char *channel, const void *data, uint3
     case MVTD_ASM_BACKWARDS:
         d->rej_time_backwards++;
         log_limited(d, MVTD_LOG_TIME, "camera %s: utime %lld earlier than its previous message: skipped",
+                    d->rig.names[cam], (long long)v->utime_us);
+        break;
+    case MVTD_ASM_AHEAD:
+        d->rej_time_ahead++;
+        log_limited(d, MVTD_LOG_TIME,
+                    "camera %s: utime %lld far ahead of the other cameras: skipped (accepted once every camera "
+                    "agrees)",
                     d->rig.names[cam], (long long)v->utime_us);
         break;
     }

@@ -21,6 +21,8 @@
 /* Detections of one message examined before the core chooses MVT_MAX_DETECTIONS of them. */
 #define MVTD_MAX_INPUT_DETECTIONS 4096
 #define MVTD_CONTINUE (-1)
+/* Capture times accepted, microseconds: 0 .. 2^60 (about 36,000 years). */
+#define MVTD_MAX_UTIME (1LL << 60)
 
 enum mvtd_log_class {
     MVTD_LOG_UNDECODABLE, MVTD_LOG_UNKNOWN_CAMERA, MVTD_LOG_BAD_VALUE, MVTD_LOG_CAPACITY, MVTD_LOG_TIME,
@@ -50,7 +52,7 @@ typedef struct mvtd {
     int64_t frames_at_last_status;
     int64_t bytes_encoded;     /* lcm_out NULL: size of what would have been published */
     /* rejected input by reason (never reset) */
-    int64_t rej_undecodable, rej_unknown_camera, rej_bad_value, rej_over_capacity, rej_time_backwards, rej_late,
+    int64_t rej_undecodable, rej_unknown_camera, rej_bad_value, rej_over_capacity, rej_time_backwards, rej_time_ahead, rej_late,
         rej_duplicate;
     int64_t cam_messages[MVT_MAX_CAMERAS];
     int64_t cam_messages_at_last_status[MVT_MAX_CAMERAS];

@@ -163,12 +163,21 @@ static void test_mvtd_asm_add_one_wrong_clock_never_rebases(void **state)
     }
     assert_int_equal(g_asm.counters.clock_jumps, 0);
     assert_int_equal(g_asm.offset_us, 0);
-    assert_int_equal(g_asm.counters.backwards, 18);
-    /* forward jump of everyone: real elapsed time, counted as a gap */
-    add(0, 600000000, 0);
-    add(1, 600000000, 0);
-    add(0, 600040000, 0);
+    assert_int_equal(g_asm.counters.far[0], 18);
+    /* one camera far ahead: refused, the others go on */
+    assert_int_equal(add(0, 900000000, 0), MVTD_ASM_AHEAD);
+    assert_int_equal(add(1, 500800000, 0), MVTD_ASM_ACCEPTED);
+    assert_int_equal(g_asm.counters.time_gaps, 0);
+    /* forward jump of everyone: re-based once all agree, the gap capped at MVTD_ASM_MAX_GAP_US */
+    assert_int_equal(add(0, 600000000, 0), MVTD_ASM_AHEAD);
+    assert_int_equal(add(1, 600000000, 0), MVTD_ASM_AHEAD);
+    assert_int_equal(add(2, 600000000, 0), MVTD_ASM_ACCEPTED);
     assert_int_equal(g_asm.counters.time_gaps, 1);
+    assert_int_equal(g_asm.counters.far[1], 3);
+    add(0, 600040000, 0);
+    add(1, 600040000, 0);
+    assert_int_equal(g_utime - g_asm.offset_us, 600000000);
+    assert_true(g_utime <= 500800000 + MVTD_ASM_MAX_GAP_US);
 }
 
 int main(void)
