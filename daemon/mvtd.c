@@ -823,8 +823,26 @@ int mvtd_configure(daemon_state_t *d, int argc, char **argv)
 
 static lcm_subscription_t *g_sub;
 
+/* Multicast input without recv_buf_size gets 4 MB: a frame set of foreground masks is a few
+ * hundred UDP fragments, more than a default socket buffer holds while the tracker works. */
+static const char *with_recv_buf(const char *url)
+{
+    static char buf[1024];
+    if (strncmp(url, "udpm://", 7) != 0 || strstr(url, "recv_buf_size=") != NULL ||
+        strlen(url) + 32 >= sizeof(buf)) {
+        return url;
+    }
+    snprintf(buf, sizeof(buf), "%s%crecv_buf_size=4194304", url, strchr(url, '?') != NULL ? '&' : '?');
+    return buf;
+}
+
 int mvtd_open(daemon_state_t *d)
 {
+    if (strcmp(d->out_url, d->in_url) == 0) {
+        d->out_url = d->in_url = with_recv_buf(d->in_url);
+    } else {
+        d->in_url = with_recv_buf(d->in_url);
+    }
     d->lcm_in = lcm_create(d->in_url);
     if (d->lcm_in == NULL) {
         fprintf(stderr, "mvtrackd: cannot open LCM input '%s'\n", d->in_url);
