@@ -28,6 +28,27 @@ def run(daemon: Path, rig: Path, scene: Path, out: Path, *args: str, check: bool
     return r
 
 
+def publish_live(lc, rig, dets, frames: int, sigma_px: float, silent=lambda f, k: False, linger_s: float = 1.0):
+    """Publishes every camera's detections at 25 fps (camera k silent at frame f when silent(f, k)),
+    handling what comes back meanwhile, then listens linger_s more."""
+    time.sleep(0.5)  # the daemon subscribes
+    t0 = time.monotonic()
+    for f in range(frames):
+        u = T0_UTIME + f * 40000
+        for k, cam in enumerate(rig.cameras):
+            if not silent(f, k):
+                lc.publish(f"DETECTIONS_{cam.name}",
+                           camera_frame(u, f, cam, [(a, b) for a, b, _ in dets[f][k]], sigma_px).encode())
+        while lc.handle_timeout(0) > 0:
+            pass
+        delay = t0 + (f + 1) * 0.04 - time.monotonic()
+        if delay > 0:
+            time.sleep(delay)
+    end = time.monotonic() + linger_s
+    while time.monotonic() < end:
+        lc.handle_timeout(50)
+
+
 def make_exp1(tmp_path: Path, var: float, occ: bool, seconds: float, seed: int):
     rig = smartroom()
     rp = tmp_path / "rig.yaml"
@@ -177,21 +198,7 @@ def test_daemon_live_udpm_tracks_and_stops_on_sigterm(tmp_path, daemon_path):
     got = []
     lc.subscribe("TRACKS", lambda c, d: got.append(mt.tracks_t.decode(d)))
     try:
-        time.sleep(0.5)
-        t0 = time.monotonic()
-        for f in range(len(states)):
-            u = T0_UTIME + f * 40000
-            for k, cam in enumerate(rig.cameras):
-                lc.publish(f"DETECTIONS_{cam.name}",
-                           camera_frame(u, f, cam, [(a, b) for a, b, _ in dets[f][k]], 7.0).encode())
-            while lc.handle_timeout(0) > 0:
-                pass
-            delay = t0 + (f + 1) * 0.04 - time.monotonic()
-            if delay > 0:
-                time.sleep(delay)
-        end = time.monotonic() + 1.0
-        while time.monotonic() < end:
-            lc.handle_timeout(50)
+        publish_live(lc, rig, dets, len(states), 7.0)
     finally:
         p.send_signal(signal.SIGTERM)
         _, err = p.communicate(timeout=10)
@@ -269,22 +276,7 @@ def test_daemon_live_camera_drop_output_keeps_rate(tmp_path, daemon_path):
     lc.subscribe("TRACKS", lambda c, d: got.append(mt.tracks_t.decode(d)))
     lc.subscribe("MVTRACK_STATUS", lambda c, d: status.append(mt.status_t.decode(d)))
     try:
-        time.sleep(0.5)
-        t0 = time.monotonic()
-        for f in range(len(states)):
-            u = T0_UTIME + f * 40000
-            for k, cam in enumerate(rig.cameras):
-                if k == 2 and 50 <= f < 100:
-                    continue
-                lc.publish(f"DETECTIONS_{cam.name}", camera_frame(u, f, cam, [(a, b) for a, b, _ in dets[f][k]], 5.0).encode())
-            while lc.handle_timeout(0) > 0:
-                pass
-            delay = t0 + (f + 1) * 0.04 - time.monotonic()
-            if delay > 0:
-                time.sleep(delay)
-        end = time.monotonic() + 1.3
-        while time.monotonic() < end:
-            lc.handle_timeout(50)
+        publish_live(lc, rig, dets, len(states), 5.0, silent=lambda f, k: k == 2 and 50 <= f < 100, linger_s=1.3)
     finally:
         p.send_signal(signal.SIGTERM)
         _, err = p.communicate(timeout=10)
