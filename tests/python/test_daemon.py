@@ -28,6 +28,17 @@ def run(daemon: Path, rig: Path, scene: Path, out: Path, *args: str, check: bool
     return r
 
 
+def start_live(tmp_path: Path, daemon_path: Path, port_base: int, seconds: float, var: float, seed: int):
+    """An Experiment 1 scene and mvtrackd listening live on a private multicast port (ttl=0)."""
+    url = f"udpm://239.255.76.67:{port_base + os.getpid() % 200}?ttl=0"
+    rig = smartroom()
+    rp = tmp_path / "rig.yaml"
+    rig.write(rp)
+    _, states, dets = experiment1(rig, seconds, var, False, seed)
+    p = subprocess.Popen([str(daemon_path), "--rig", str(rp), "--in", url], stderr=subprocess.PIPE, text=True)
+    return rig, states, dets, p, lcm.LCM(url)
+
+
 def publish_live(lc, rig, dets, frames: int, sigma_px: float, silent=lambda f, k: False, linger_s: float = 1.0):
     """Publishes every camera's detections at 25 fps (camera k silent at frame f when silent(f, k)),
     handling what comes back meanwhile, then listens linger_s more."""
@@ -187,14 +198,7 @@ def test_daemon_help_and_bad_arguments(tmp_path, daemon_path):
 
 def test_daemon_live_udpm_tracks_and_stops_on_sigterm(tmp_path, daemon_path):
     """Live over LCM multicast (ttl=0, a private port): publish 3 s at 25 fps, then SIGTERM."""
-    port = 7700 + os.getpid() % 200
-    url = f"udpm://239.255.76.67:{port}?ttl=0"
-    rig = smartroom()
-    rp = tmp_path / "rig.yaml"
-    rig.write(rp)
-    _, states, dets = experiment1(rig, 3.0, 50.0, False, 8)
-    p = subprocess.Popen([str(daemon_path), "--rig", str(rp), "--in", url], stderr=subprocess.PIPE, text=True)
-    lc = lcm.LCM(url)
+    rig, states, dets, p, lc = start_live(tmp_path, daemon_path, 7700, 3.0, 50.0, 8)
     got = []
     lc.subscribe("TRACKS", lambda c, d: got.append(mt.tracks_t.decode(d)))
     try:
@@ -264,14 +268,7 @@ def test_daemon_time_faults_counted_tracks_survive(tmp_path, daemon_path):
 def test_daemon_live_camera_drop_output_keeps_rate(tmp_path, daemon_path):
     """Live: camera 2 stops for 2 s and comes back; a TRACKS message for every frame set, the camera
     reported down and back in MVTRACK_STATUS, frames during the drop without it in cameras_used."""
-    port = 7500 + os.getpid() % 200
-    url = f"udpm://239.255.76.67:{port}?ttl=0"
-    rig = smartroom()
-    rp = tmp_path / "rig.yaml"
-    rig.write(rp)
-    _, states, dets = experiment1(rig, 5.0, 25.0, False, 9)
-    p = subprocess.Popen([str(daemon_path), "--rig", str(rp), "--in", url], stderr=subprocess.PIPE, text=True)
-    lc = lcm.LCM(url)
+    rig, states, dets, p, lc = start_live(tmp_path, daemon_path, 7500, 5.0, 25.0, 9)
     got, status = [], []
     lc.subscribe("TRACKS", lambda c, d: got.append(mt.tracks_t.decode(d)))
     lc.subscribe("MVTRACK_STATUS", lambda c, d: status.append(mt.status_t.decode(d)))
