@@ -563,7 +563,11 @@ static void usage(FILE *f)
             "  --particles N       pf: particles per person, 16..%d (default %d)\n"
             "  --exclusion M       pf: particles within M metres (horizontally) of another person's\n"
             "                      centre are penalised, so two filters cannot share one body;\n"
-            "                      0 = off, the paper's independent filters (default 0.3)\n"
+            "                      0 = off, the paper's independent filters (default 0.5)\n"
+            "  --particle-model column|point\n"
+            "                      pf: column (default): a particle is a head-top hypothesis, each\n"
+            "                      camera scores the body under it and the background above it;\n"
+            "                      point: the paper's, a particle is a point of the body\n"
             "  --seed N            pf: random number seed (default 1); same seed, same output\n"
             "  --publish-particles N\n"
             "                      pf: publish N particles per person on MVTRACK_PARTICLES\n"
@@ -655,7 +659,8 @@ static int option_choice(const char *opt_name, const char *arg, const char *cons
 
 int mvtd_configure(daemon_state_t *d, int argc, char **argv)
 {
-    const char *rig_path = NULL, *in_url = MVTD_DEFAULT_URL, *out_url = NULL, *mode = "pkf", *gate = "chi2", *merge = "neither";
+    const char *rig_path = NULL, *in_url = MVTD_DEFAULT_URL, *out_url = NULL, *mode = "pkf", *gate = "chi2", *merge = "neither",
+               *particle_model = "column";
     double sigma_px = 2.0, deadline_ms = 20.0, gate_chi2 = 13.8;
     mvt_real q[3] = {MVT_R(0.5), MVT_R(0.5), MVT_R(0.05)};
     static const struct option opts[] = {
@@ -667,12 +672,12 @@ int mvtd_configure(daemon_state_t *d, int argc, char **argv)
         {"merge", required_argument, 0, 'M'},    {"help", no_argument, 0, 'h'},
         {"particles", required_argument, 0, 'P'}, {"exclusion", required_argument, 0, 'X'},
         {"seed", required_argument, 0, 'S'},     {"publish-particles", required_argument, 0, 'Q'},
-        {0, 0, 0, 0}};
+        {"particle-model", required_argument, 0, 'B'}, {0, 0, 0, 0}};
     int opt;
     optind = 1; /* callable more than once (tests, fuzzer) */
     long particles = MVT_MAX_PARTICLES, seed = 1, publish_particles = 0;
-    double exclusion_m = 0.3;
-    while ((opt = getopt_long(argc, argv, "r:i:o:m:g:c:q:s:d:M:vhP:X:S:Q:", opts, NULL)) != -1) {
+    double exclusion_m = 0.5;
+    while ((opt = getopt_long(argc, argv, "r:i:o:m:g:c:q:s:d:M:vhP:X:S:Q:B:", opts, NULL)) != -1) {
         switch (opt) {
         case 'r': rig_path = optarg; break;
         case 'i': in_url = optarg; break;
@@ -680,6 +685,7 @@ int mvtd_configure(daemon_state_t *d, int argc, char **argv)
         case 'm': mode = optarg; break;
         case 'g': gate = optarg; break;
         case 'M': merge = optarg; break;
+        case 'B': particle_model = optarg; break;
         case 'c':
             if (option_pos("--gate-chi2", optarg, &gate_chi2) != 0) {
                 return 2;
@@ -745,10 +751,12 @@ int mvtd_configure(daemon_state_t *d, int argc, char **argv)
     static const char *const modes[] = {"pkf", "ekf", "pkf-paper", "pkf-centred", "kf", "pf", "pf-ms"};
     static const char *const gates[] = {"chi2", "paper"};
     static const char *const merges[] = {"neither", "share", "off"};
+    static const char *const particle_models[] = {"column", "point"};
     const int mi = option_choice("--mode", mode, modes, 7);
     const int gi = option_choice("--gate", gate, gates, 2);
     const int ri = option_choice("--merge", merge, merges, 3);
-    if (mi < 0 || gi < 0 || ri < 0) {
+    const int bi = option_choice("--particle-model", particle_model, particle_models, 2);
+    if (mi < 0 || gi < 0 || ri < 0 || bi < 0) {
         return 2;
     }
     static const mvt_pkf_lin_t mode_lin[] = {MVT_PKF_JACOBIAN, MVT_PKF_JACOBIAN, MVT_PKF_PAPER,
@@ -792,6 +800,7 @@ int mvtd_configure(daemon_state_t *d, int argc, char **argv)
         pcfg.det = cfg;
         pcfg.num_particles = (int)particles;
         pcfg.use_colour = mi == 5;
+        pcfg.column = bi == 0;
         pcfg.exclusion_m = (mvt_real)exclusion_m;
         pcfg.seed = (uint64_t)seed;
         if (mvt_pft_init(&pft, &pcfg, cams, d->rig.num_cameras) != MVT_OK) {

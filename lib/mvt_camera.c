@@ -60,15 +60,15 @@ mvt_real mvt_cam_depth(const mvt_camera_t *cam, const mvt_real xw[3])
 
 void mvt_cam_distort(const mvt_camera_t *cam, const mvt_real xn[2], mvt_real xd[2], mvt_real jac[4])
 {
+    mvt_cam_distort_value(cam, xn[0], xn[1], xd);
+    if (jac == NULL) {
+        return;
+    }
     if (!cam->has_dist) {
-        xd[0] = xn[0];
-        xd[1] = xn[1];
-        if (jac != NULL) {
-            jac[0] = MVT_R(1.0);
-            jac[1] = MVT_R(0.0);
-            jac[2] = MVT_R(0.0);
-            jac[3] = MVT_R(1.0);
-        }
+        jac[0] = MVT_R(1.0);
+        jac[1] = MVT_R(0.0);
+        jac[2] = MVT_R(0.0);
+        jac[3] = MVT_R(1.0);
         return;
     }
     const mvt_real *d = cam->dist;
@@ -78,20 +78,16 @@ void mvt_cam_distort(const mvt_camera_t *cam, const mvt_real xn[2], mvt_real xd[
     const mvt_real b = cam->has_rational ? MVT_R(1.0) + r2 * (d[5] + r2 * (d[6] + r2 * d[7])) : MVT_R(1.0);
     const mvt_real radial = cam->has_rational ? a / b : a;
     const mvt_real p1 = d[2], p2 = d[3];
-    xd[0] = x * radial + MVT_R(2.0) * p1 * x * y + p2 * (r2 + MVT_R(2.0) * x * x);
-    xd[1] = y * radial + p1 * (r2 + MVT_R(2.0) * y * y) + MVT_R(2.0) * p2 * x * y;
-    if (jac != NULL) {
-        const mvt_real da = d[0] + r2 * (MVT_R(2.0) * d[1] + MVT_R(3.0) * r2 * d[4]);
-        mvt_real drad = da; /* d radial / d r2 */
-        if (cam->has_rational) {
-            const mvt_real db = d[5] + r2 * (MVT_R(2.0) * d[6] + MVT_R(3.0) * r2 * d[7]);
-            drad = (da * b - a * db) / (b * b);
-        }
-        jac[0] = radial + MVT_R(2.0) * x * x * drad + MVT_R(2.0) * p1 * y + MVT_R(6.0) * p2 * x;
-        jac[1] = MVT_R(2.0) * x * y * drad + MVT_R(2.0) * p1 * x + MVT_R(2.0) * p2 * y;
-        jac[2] = jac[1];
-        jac[3] = radial + MVT_R(2.0) * y * y * drad + MVT_R(6.0) * p1 * y + MVT_R(2.0) * p2 * x;
+    const mvt_real da = d[0] + r2 * (MVT_R(2.0) * d[1] + MVT_R(3.0) * r2 * d[4]);
+    mvt_real drad = da; /* d radial / d r2 */
+    if (cam->has_rational) {
+        const mvt_real db = d[5] + r2 * (MVT_R(2.0) * d[6] + MVT_R(3.0) * r2 * d[7]);
+        drad = (da * b - a * db) / (b * b);
     }
+    jac[0] = radial + MVT_R(2.0) * x * x * drad + MVT_R(2.0) * p1 * y + MVT_R(6.0) * p2 * x;
+    jac[1] = MVT_R(2.0) * x * y * drad + MVT_R(2.0) * p1 * x + MVT_R(2.0) * p2 * y;
+    jac[2] = jac[1];
+    jac[3] = radial + MVT_R(2.0) * y * y * drad + MVT_R(6.0) * p1 * y + MVT_R(2.0) * p2 * x;
 }
 
 mvt_err_t mvt_cam_project(const mvt_camera_t *cam, const mvt_real xw[3], mvt_real uv[2], mvt_real jac[6])

@@ -55,6 +55,23 @@ static inline void mvt_cam_to_camera(const mvt_camera_t *cam, const mvt_real xw[
     }
 }
 
+/* The distortion model's value at a normalised point (mvt_cam_distort without the Jacobian;
+ * inline for the particle filter's per-particle loops). */
+static inline void mvt_cam_distort_value(const mvt_camera_t *cam, mvt_real x, mvt_real y, mvt_real xd[2])
+{
+    if (!cam->has_dist) {
+        xd[0] = x;
+        xd[1] = y;
+        return;
+    }
+    const mvt_real *d = cam->dist;
+    const mvt_real r2 = x * x + y * y;
+    const mvt_real a = MVT_R(1.0) + r2 * (d[0] + r2 * (d[1] + r2 * d[4]));
+    const mvt_real radial = cam->has_rational ? a / (MVT_R(1.0) + r2 * (d[5] + r2 * (d[6] + r2 * d[7]))) : a;
+    xd[0] = x * radial + MVT_R(2.0) * d[2] * x * y + d[3] * (r2 + MVT_R(2.0) * x * x);
+    xd[1] = y * radial + d[2] * (r2 + MVT_R(2.0) * y * y) + MVT_R(2.0) * d[3] * x * y;
+}
+
 /* Camera-frame depth Z of a world point, metres (> 0 in front of the camera). */
 mvt_real mvt_cam_depth(const mvt_camera_t *cam, const mvt_real xw[3]);
 

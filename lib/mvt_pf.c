@@ -62,6 +62,8 @@ mvt_err_t mvt_pf_tables_init(mvt_pf_tables_t *tab, const mvt_pf_model_t *m)
     for (int l = 0; l < 256; l++) {
         const int q = l < floor_level ? floor_level : l;
         tab->log_d[l] = MVT_LOG((mvt_real)q / MVT_R(255.0));
+        const mvt_real bg = MVT_R(1.0) - (mvt_real)l / MVT_R(255.0);
+        tab->log_bg[l] = MVT_LOG(bg > m->p_b ? bg : m->p_b);
     }
     for (int k = 0; k <= 128; k++) {
         tab->log_h[k] = log_gauss_mix(m->h_b, (mvt_real)k / MVT_R(256.0), m->sigma_h);
@@ -233,9 +235,42 @@ void mvt_pf_predict(mvt_pf_pool_t *p, mvt_real dt_s, const mvt_pf_noise_t *noise
     }
 }
 
+/* Mask index of the camera-frame point (X, Y, Z), or -1: behind the camera, outside the lens
+ * model's window or outside the mask. O(1). */
+static inline int view_index(const mvt_camera_t *c, const mvt_pf_fov_t *f, const mvt_pf_image_t *img,
+                             mvt_real X, mvt_real Y, mvt_real Z)
+{
+    if (!(Z > MVT_R(1e-3))) {
+        return -1;
+    }
+    const mvt_real iz = MVT_R(1.0) / Z;
+    const mvt_real xn = X * iz, yn = Y * iz;
+    if (!(xn >= f->x_min && xn <= f->x_max && yn >= f->y_min && yn <= f->y_max)) {
+        return -1;
+    }
+    mvt_real xd[2];
+    mvt_cam_distort_value(c, xn, yn, xd);
+    return mvt_pf_image_index(img, c->fx * xd[0] + c->skew * xd[1] + c->cx, c->fy * xd[1] + c->cy);
+}
+
+/* Log of Eq. 11 x Eq. 13 for a particle's colour state at mask pixel idx (foreground) or the
+ * background floor. */
+static inline mvt_real colour_log(const mvt_pf_tables_t *tab, const mvt_mask_t *m, int idx, mvt_real h, mvt_real s)
+{
+    if (idx < 0 || !m->fg[idx]) {
+        return tab->log_colour_background;
+    }
+    const int hq = (int)(h * MVT_R(256.0)) & 255;
+    int dh = m->hue[idx] > hq ? m->hue[idx] - hq : hq - m->hue[idx];
+    dh = dh > 128 ? 256 - dh : dh;
+    const int sq = (int)(s * MVT_R(255.0) + MVT_R(0.5));
+    const int ds = m->sat[idx] > sq ? m->sat[idx] - sq : sq - m->sat[idx];
+    return tab->log_h[dh] + tab->log_s[ds];
+}
+
 void mvt_pf_weight(mvt_pf_pool_t *p, const mvt_camera_t *cams, const mvt_pf_fov_t *fovs,
                    const mvt_pf_image_t *images, int num_cams, const mvt_pf_tables_t *tab, int use_colour,
-                   mvt_real exponent, mvt_real on_fg[])
+                   const mvt_pf_body_t *body, mvt_real exponent, mvt_real on_fg[])
 {
     MVT_ASSERT(p != NULL && cams != NULL && fovs != NULL && images != NULL && tab != NULL);
     const uint8_t fg_level = (uint8_t)(((int)tab->d_floor + 255) / 2);
@@ -250,39 +285,38 @@ void mvt_pf_weight(mvt_pf_pool_t *p, const mvt_camera_t *cams, const mvt_pf_fov_
         const mvt_camera_t *c = &cams[k];
         const mvt_pf_fov_t *f = &fovs[k];
         const int colour = use_colour && img->mask->has_colour;
-        const mvt_real outside = tab->log_d[tab->d_floor] + (colour ? tab->log_colour_background : MVT_R(0.0));
-        const uint8_t *fg = img->mask->fg, *hue = img->mask->hue, *sat = img->mask->sat;
+        const uint8_t *d = img->d;
+        /* R's third column: the camera-frame direction of world up */
+        const mvt_real ux = c->R[2], uy = c->R[5], uz = c->R[8];
         int n_fg = 0;
         for (int i = 0; i < p->n; i++) {
             const mvt_real xw[3] = {p->x[i], p->y[i], p->z[i]};
             mvt_real xc[3];
             mvt_cam_to_camera(c, xw, xc);
-            mvt_real lw = outside;
-            if (xc[2] > MVT_R(1e-3)) {
-                const mvt_real xn[2] = {xc[0] / xc[2], xc[1] / xc[2]};
-                if (xn[0] >= f->x_min && xn[0] <= f->x_max && xn[1] >= f->y_min && xn[1] <= f->y_max) {
-                    mvt_real xd[2];
-                    mvt_cam_distort(c, xn, xd, NULL);
-                    const mvt_real u = c->fx * xd[0] + c->skew * xd[1] + c->cx;
-                    const mvt_real v = c->fy * xd[1] + c->cy;
-                    const int idx = mvt_pf_image_index(img, u, v);
-                    if (idx >= 0) {
-                        const uint8_t l = img->d[idx];
-                        lw = tab->log_d[l];
-                        n_fg += l > fg_level;
-                        if (colour) {
-                            if (fg[idx]) {
-                                const int hq = (int)(p->h[i] * MVT_R(256.0)) & 255;
-                                int dh = hue[idx] > hq ? hue[idx] - hq : hq - hue[idx];
-                                dh = dh > 128 ? 256 - dh : dh;
-                                const int sq = (int)(p->s[i] * MVT_R(255.0) + MVT_R(0.5));
-                                const int ds = sat[idx] > sq ? sat[idx] - sq : sq - sat[idx];
-                                lw += tab->log_h[dh] + tab->log_s[ds];
-                            } else {
-                                lw += tab->log_colour_background;
-                            }
-                        }
-                    }
+            mvt_real lw;
+            if (body == NULL) {
+                const int idx = view_index(c, f, img, xc[0], xc[1], xc[2]);
+                const uint8_t l = idx >= 0 ? d[idx] : tab->d_floor;
+                lw = tab->log_d[l];
+                n_fg += l > fg_level;
+                if (colour) {
+                    lw += colour_log(tab, img->mask, idx, p->h[i], p->s[i]);
+                }
+            } else {
+                /* the column: points at heights z + dz are xc + dz * up */
+                const mvt_real dz_above = body->above_m, dz_head = -body->head_m;
+                const mvt_real dz_torso = (body->torso_frac - MVT_R(1.0)) * p->z[i];
+                const mvt_real dz_legs = (body->legs_frac - MVT_R(1.0)) * p->z[i];
+                const int ia = view_index(c, f, img, xc[0] + dz_above * ux, xc[1] + dz_above * uy, xc[2] + dz_above * uz);
+                const int ih = view_index(c, f, img, xc[0] + dz_head * ux, xc[1] + dz_head * uy, xc[2] + dz_head * uz);
+                const int it = view_index(c, f, img, xc[0] + dz_torso * ux, xc[1] + dz_torso * uy, xc[2] + dz_torso * uz);
+                const int il = view_index(c, f, img, xc[0] + dz_legs * ux, xc[1] + dz_legs * uy, xc[2] + dz_legs * uz);
+                const uint8_t lh = ih >= 0 ? d[ih] : tab->d_floor;
+                lw = tab->log_bg[ia >= 0 ? d[ia] : tab->d_floor] + tab->log_d[lh] +
+                     tab->log_d[it >= 0 ? d[it] : tab->d_floor] + tab->log_d[il >= 0 ? d[il] : tab->d_floor];
+                n_fg += lh > fg_level;
+                if (colour) {
+                    lw += colour_log(tab, img->mask, it, p->h[i], p->s[i]);
                 }
             }
             p->w[i] += exponent * lw;
@@ -407,6 +441,10 @@ void mvt_pf_estimate(const mvt_pf_pool_t *p, mvt_real p_h, mvt_real head_quantil
         acc += p->w[i];
     }
     e->box_count = m;
+    e->head_z = e->mean[2];
+    if (!(head_quantile > MVT_R(0.0))) {
+        return;
+    }
     /* head: the weighted quantile of z (weight above it = 1 - head_quantile) */
     sort_desc(p->z, order, p->n);
     acc = MVT_R(0.0);

@@ -7,7 +7,11 @@
  *   predict           constant velocity (Eq. 14 / 15), isotropic Gaussian noise
  *   weight            sum over cameras of log D at each particle's projection, plus with colour the
  *                     log of Eq. 11 and Eq. 13 (circular hue distance min(|dH|, 1 - |dH|), not the
- *                     printed 1/2 - |dH|), all from 256-entry tables
+ *                     printed 1/2 - |dH|), all from 256-entry tables. Two particle models:
+ *                       point   (the paper) a particle is a point of the body, scored where it projects
+ *                       column  a particle is a hypothesis of the head top; each camera scores the
+ *                               vertical segment under it (head, torso, legs on foreground) and a
+ *                               point above it (on background), colour at the torso point
  *   estimate          weighted mean, covariance, the P_H volume (axis-aligned box of the fewest
  *                     heaviest particles accumulating P_H), head height, hue and saturation
  *   resample          systematic, when the effective sample size falls below a threshold
@@ -53,6 +57,7 @@ typedef struct mvt_pf_model {
 /* Tables derived once from a model (mvt_pf_tables_init). */
 typedef struct mvt_pf_tables {
     mvt_real log_d[256];   /* log(max(l / 255, p_B)) */
+    mvt_real log_bg[256];  /* log(max(1 - l / 255, p_B)): a point expected on background */
     mvt_real log_h[129];   /* log of Eq. 11 at circular hue distance k / 256 */
     mvt_real log_s[256];   /* log of Eq. 13 at saturation distance k / 255 */
     mvt_real log_colour_background; /* log(h_B s_B): colour term where the mask is background */
@@ -127,15 +132,31 @@ typedef struct mvt_pf_noise {
  * take thousands of frames to spread the cloud over a body's height. dt_s >= 0. O(n). */
 void mvt_pf_predict(mvt_pf_pool_t *pool, mvt_real dt_s, const mvt_pf_noise_t *noise, mvt_rng_t *rng);
 
-/* Adds to pool->w exponent times each camera's log-likelihood (images with width 0 are skipped). With colour
- * (use_colour and the camera's mask has colour), a particle on foreground adds the log of
- * Eq. 11 x Eq. 13 at its pixel, on background log(h_B s_B). Outside the image or behind the camera
- * the particle gets log p_B (and log(h_B s_B)), the same as on background.
+/* The column model's body: where, under a head-top hypothesis at height z, each camera looks. */
+typedef struct mvt_pf_body {
+    mvt_real above_m;    /* a point this far above the top should be background, > 0; default 0.06 */
+    mvt_real head_m;     /* a point this far under the top should be foreground (the head), > 0;
+                            default 0.06 */
+    mvt_real torso_frac; /* torso point at this fraction of z (colour is scored here), (0, 1);
+                            default 0.7 */
+    mvt_real legs_frac;  /* legs point at this fraction of z, (0, 1); default 0.3 */
+    mvt_real min_top_m;  /* lowest head top (mvt_pft reflects hypotheses below it: a shadow on the
+                            floor is a perfect column of height ~0), >= 0; default 0.9 */
+} mvt_pf_body_t;
+
+/* Adds to pool->w exponent times each camera's log-likelihood (images with width 0 are skipped).
+ * body NULL (point model): log D at the particle's pixel. body set (column model): log D at the
+ * head, torso and legs points plus log max(1 - D, p_B) at the point above the top.
+ * With colour (use_colour and the camera's mask has colour), the scored point (point model: the
+ * particle; column model: the torso point) adds on foreground the log of Eq. 11 x Eq. 13 at its
+ * pixel, on background log(h_B s_B). A point outside the image or behind the camera reads D = p_B
+ * (and log(h_B s_B)), the same as background.
  * on_fg[k] (may be NULL) receives, per camera, the fraction of particles (unweighted) whose
- * projection has D above the midpoint between p_B and 1. O(n * num_cams). */
+ * particle (column model: head point) has D above the midpoint between p_B and 1.
+ * O(n * num_cams) projections (column model: 4 per particle and camera). */
 void mvt_pf_weight(mvt_pf_pool_t *pool, const mvt_camera_t *cams, const mvt_pf_fov_t *fovs,
                    const mvt_pf_image_t *images, int num_cams, const mvt_pf_tables_t *tab, int use_colour,
-                   mvt_real exponent, mvt_real on_fg[]);
+                   const mvt_pf_body_t *body, mvt_real exponent, mvt_real on_fg[]);
 
 /* Turns log weights into normalised weights (max-subtracted, so no underflow to all zeros) and
  * returns the effective sample size 1 / sum(w^2), in [1, n]. A pool whose log weights are not all
@@ -151,8 +172,9 @@ typedef struct mvt_pf_estimate {
     mvt_real hue, saturation;   /* weighted circular mean of h, mean of s */
 } mvt_pf_estimate_t;
 
-/* Estimates from normalised weights. order: workspace of n entries. p_h and head_quantile in
- * (0, 1]. O(n log n) (two heap sorts, no recursion). */
+/* Estimates from normalised weights. order: workspace of n entries. p_h in (0, 1], head_quantile
+ * in [0, 1] (0: head_z is the mean z, for particles that are head hypotheses). O(n log n) (one or
+ * two heap sorts, no recursion). */
 void mvt_pf_estimate(const mvt_pf_pool_t *pool, mvt_real p_h, mvt_real head_quantile,
                      uint16_t order[MVT_MAX_PARTICLES], mvt_pf_estimate_t *est);
 

@@ -22,13 +22,19 @@ void mvt_pft_config_default(mvt_pft_config_t *c)
     c->noise.z_renew = MVT_R(0.2);
     c->noise.z_min = MVT_R(0.0);
     c->noise.z_max = MVT_R(2.2);
+    c->column = 1;
+    c->body.above_m = MVT_R(0.06);
+    c->body.head_m = MVT_R(0.06);
+    c->body.torso_frac = MVT_R(0.7);
+    c->body.legs_frac = MVT_R(0.3);
+    c->body.min_top_m = MVT_R(0.9);
     c->num_particles = MVT_MAX_PARTICLES;
     c->use_colour = 1;
     c->lik_exponent = MVT_R(0.5);
     c->ess_fraction = MVT_R(0.5);
     c->p_h = MVT_R(0.95);
     c->head_quantile = MVT_R(0.97);
-    c->exclusion_m = MVT_R(0.3);
+    c->exclusion_m = MVT_R(0.5);
     c->exclusion_log = MVT_R(8.0);
     c->birth_sep_m = MVT_R(0.5);
     c->birth_min_height_m = MVT_R(1.0);
@@ -37,6 +43,8 @@ void mvt_pft_config_default(mvt_pft_config_t *c)
     c->support_fraction = MVT_R(0.25);
     c->support_min_views = 2;
     c->lost_s = MVT_R(1.0);
+    c->confirm_frames = 5;
+    c->tentative_lost_s = MVT_R(0.2);
     c->seed = 1u;
 }
 
@@ -62,6 +70,15 @@ mvt_err_t mvt_pft_init(mvt_pft_t *self, const mvt_pft_config_t *cfg, const mvt_c
         !(cfg->support_fraction > MVT_R(0.0)) || !in_range(cfg->support_fraction, MVT_R(0.0), MVT_R(1.0)) ||
         cfg->support_min_views < 1 || !(cfg->lost_s > MVT_R(0.0)) || !isfinite(cfg->lost_s) ||
         !isfinite(cfg->birth_sep_m) || !(cfg->lik_exponent > MVT_R(0.0)) || !(cfg->lik_exponent <= MVT_R(1.0)) || !isfinite(cfg->birth_xy_std_m)) {
+        return MVT_ERR_INVALID;
+    }
+    const mvt_pf_body_t *b = &cfg->body;
+    if ((cfg->column != 0 && cfg->column != 1) || cfg->confirm_frames < 1 || !(cfg->tentative_lost_s > MVT_R(0.0)) ||
+        !isfinite(cfg->tentative_lost_s) || !in_range(b->min_top_m, MVT_R(0.0), MVT_R(10.0))) {
+        return MVT_ERR_INVALID;
+    }
+    if (cfg->column && (!in_range(b->above_m, MVT_R(1e-3), MVT_R(1.0)) || !in_range(b->head_m, MVT_R(1e-3), MVT_R(1.0)) ||
+                        !in_range(b->torso_frac, MVT_R(0.01), MVT_R(0.99)) || !in_range(b->legs_frac, MVT_R(0.01), MVT_R(0.99)))) {
         return MVT_ERR_INVALID;
     }
     memset(self, 0, sizeof(*self));
@@ -90,8 +107,9 @@ static int popcount(uint32_t x)
     return n;
 }
 
-/* A new target around a confirmed blob track: the body below the head point, colour sampled
- * from the pixels the particles project onto. */
+/* A new target around a confirmed blob track: head-top hypotheses around its head point (column
+ * model) or points of the body below it (point model); colour sampled from the pixels the scored
+ * points project onto. */
 static void birth(mvt_pft_t *self, mvt_pft_target_t *t, const mvt_track_out_t *src, int64_t now_us)
 {
     const mvt_pft_config_t *c = &self->cfg;
@@ -100,17 +118,18 @@ static void birth(mvt_pft_t *self, mvt_pft_target_t *t, const mvt_track_out_t *s
     memset(t, 0, sizeof(*t) - sizeof(t->pool));
     t->id = self->next_id;
     self->next_id = self->next_id == INT32_MAX ? 1 : self->next_id + 1;
-    t->status = MVT_TRACK_CONFIRMED;
+    t->status = c->confirm_frames > 1 ? MVT_TRACK_TENTATIVE : MVT_TRACK_CONFIRMED;
     t->last_supported_us = now_us;
     p->n = c->num_particles;
     const mvt_real top = src->pos_m[2] > MVT_R(0.2) ? src->pos_m[2] : MVT_R(0.2);
     for (int i = 0; i < p->n; i++) {
-        mvt_real g[4];
+        mvt_real g[6];
         mvt_rng_normal2(&self->rng, g);
         mvt_rng_normal2(&self->rng, g + 2);
+        mvt_rng_normal2(&self->rng, g + 4);
         p->x[i] = src->pos_m[0] + c->birth_xy_std_m * g[0];
         p->y[i] = src->pos_m[1] + c->birth_xy_std_m * g[1];
-        p->z[i] = MVT_R(0.05) + (top - MVT_R(0.05)) * mvt_rng_uniform(&self->rng);
+        p->z[i] = c->column ? top + c->birth_xy_std_m * g[4] : MVT_R(0.05) + (top - MVT_R(0.05)) * mvt_rng_uniform(&self->rng);
         p->vx[i] = src->vel_ms[0] + MVT_R(0.2) * g[2];
         p->vy[i] = src->vel_ms[1] + MVT_R(0.2) * g[3];
         p->vz[i] = MVT_R(0.0);
@@ -123,7 +142,8 @@ static void birth(mvt_pft_t *self, mvt_pft_target_t *t, const mvt_track_out_t *s
             if (img->width < 1 || !img->mask->has_colour) {
                 continue;
             }
-            const mvt_real xw[3] = {p->x[i], p->y[i], p->z[i]};
+            /* the colour state scores the particle (point model) or the torso point (column) */
+            const mvt_real xw[3] = {p->x[i], p->y[i], c->column ? c->body.torso_frac * p->z[i] : p->z[i]};
             mvt_real uv[2];
             if (mvt_cam_project(&self->det.cams[k], xw, uv, NULL) != MVT_OK) {
                 continue;
@@ -138,7 +158,7 @@ static void birth(mvt_pft_t *self, mvt_pft_target_t *t, const mvt_track_out_t *s
         }
     }
     /* a first estimate so that the exclusion prior and output have something this frame */
-    mvt_pf_estimate(p, c->p_h, c->head_quantile, self->order, &t->est);
+    mvt_pf_estimate(p, c->p_h, c->column ? MVT_R(0.0) : c->head_quantile, self->order, &t->est);
     self->counters.births++;
 }
 
@@ -206,7 +226,13 @@ static void delete_targets(mvt_pft_t *self, int64_t now_us)
         if (a->id == 0) {
             continue;
         }
-        if (mvt_us_to_s(now_us - a->last_supported_us) > c->lost_s) {
+        const mvt_real unseen_s = mvt_us_to_s(now_us - a->last_supported_us);
+        if (a->status == MVT_TRACK_TENTATIVE && unseen_s > c->tentative_lost_s) {
+            a->id = 0;
+            self->counters.deleted_tentative++;
+            continue;
+        }
+        if (unseen_s > c->lost_s) {
             a->id = 0;
             self->counters.deleted_lost++;
             continue;
@@ -296,22 +322,34 @@ mvt_err_t mvt_pft_step(mvt_pft_t *self, const mvt_frame_t *frame, mvt_output_t *
         }
     }
     const int need = c->support_min_views < masks ? c->support_min_views : masks;
+    /* head-top hypotheses keep their height: no renewal over the body */
+    mvt_pf_noise_t noise = c->noise;
+    noise.z_renew = c->column ? MVT_R(0.0) : noise.z_renew;
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         mvt_pft_target_t *a = &self->targets[t];
         if (a->id == 0) {
             continue;
         }
-        mvt_pf_predict(&a->pool, dt, &c->noise, &self->rng);
+        mvt_pf_predict(&a->pool, dt, &noise, &self->rng);
+        if (c->column) { /* head tops below the lowest one are reflected above it */
+            const mvt_real lo = c->body.min_top_m;
+            for (int i = 0; i < a->pool.n; i++) {
+                if (a->pool.z[i] < lo) {
+                    a->pool.z[i] = lo + (lo - a->pool.z[i]);
+                    a->pool.vz[i] = -a->pool.vz[i];
+                }
+            }
+        }
         exclusion_prior(self, t);
         mvt_real on_fg[MVT_MAX_CAMERAS];
         mvt_pf_weight(&a->pool, self->det.cams, self->fovs, self->images, num_cams, &self->tab, c->use_colour,
-                      c->lik_exponent, on_fg);
+                      c->column ? &c->body : NULL, c->lik_exponent, on_fg);
         a->ess = mvt_pf_normalise(&a->pool);
         if (!(a->ess > MVT_R(0.0))) {
             self->counters.numeric_faults++;
         }
-        mvt_pf_estimate(&a->pool, c->p_h, c->head_quantile, self->order, &a->est);
-        if (masks > 0) {
+        mvt_pf_estimate(&a->pool, c->p_h, c->column ? MVT_R(0.0) : c->head_quantile, self->order, &a->est);
+        if (masks > 0 && !c->column) {
             a->est.head_z = column_top(self, a->est.mean, a->est.head_z, masks);
         }
         a->cameras_used = 0u;
@@ -319,9 +357,12 @@ mvt_err_t mvt_pft_step(mvt_pft_t *self, const mvt_frame_t *frame, mvt_output_t *
             a->cameras_used |= on_fg[k] >= c->support_fraction && self->images[k].width > 0 ? 1u << k : 0u;
         }
         const int supported = masks > 0 && popcount(a->cameras_used) >= need;
-        a->status = supported ? MVT_TRACK_CONFIRMED : MVT_TRACK_COASTING;
         if (supported) {
             a->last_supported_us = frame->utime_us;
+            a->supported_frames += a->supported_frames < c->confirm_frames;
+        }
+        if (a->status != MVT_TRACK_TENTATIVE || a->supported_frames >= c->confirm_frames) {
+            a->status = supported ? MVT_TRACK_CONFIRMED : MVT_TRACK_COASTING;
         }
         if (a->ess < c->ess_fraction * (mvt_real)a->pool.n) {
             mvt_pf_resample(&a->pool, &self->rng, &self->scratch);

@@ -15,9 +15,12 @@
  *   lifecycle a camera supports a target when at least support_fraction of its particles project
  *             onto foreground; a target supported by fewer than support_min_views cameras (capped
  *             by the cameras that sent masks) for lost_s is deleted; so is one that leaves the
- *             volume (plus margin) or comes within dup_dist_m (horizontally) of an older target
- * Output per target: position = weighted mean x, y and the head height (weighted z quantile
- * head_quantile: the particles fill the body, the tracked point is the head top), velocity,
+ *             volume (plus margin) or comes within dup_dist_m (horizontally) of an older target.
+ *             A new target stays TENTATIVE until supported in confirm_frames frames and is deleted
+ *             when unsupported for tentative_lost_s meanwhile (blob-level ghosts die there)
+ * Output per target: position = the weighted mean (column model: particles are head tops) or
+ * the mean x, y with the head height found by scanning the masks down the column above it (point
+ * model: the particles fill the body, the tracked point is the head top), velocity,
  * particle covariance, the P_H volume's box as extent, the colour estimate (MS+C).
  * Identities count up from 1, never reused. The caller owns the mvt_pft_t.
  */
@@ -37,14 +40,20 @@ typedef struct mvt_pft_config {
                                    h_b 0.1, s_b 0.1 */
     mvt_pf_noise_t noise;       /* pos 0.02 m^2/s, vel 1.0 m^2/s^3, colour 0.005 1/s, z_renew 0.1
                                    over z 0..2.2 m (mvt_pft_init: z_max at least the volume's top) */
+    int column;                 /* 1 (default): column model, a particle is a head-top hypothesis
+                                   scored along the body under it (mvt_pf_weight); 0: the paper's
+                                   point model, a particle is a point of the body */
+    mvt_pf_body_t body;         /* column model: above 0.06 m, head 0.06 m, torso 0.7, legs 0.3,
+                                   lowest top 0.9 m */
     int num_particles;          /* per target, 16..MVT_MAX_PARTICLES; default MVT_MAX_PARTICLES */
     int use_colour;             /* 1 (default): MS+C for cameras that send hue/saturation; 0: MS */
     mvt_real lik_exponent;      /* each camera's log-likelihood is multiplied by this, (0, 1]: the
                                    cameras' masks are not independent views of one point; default 1 */
     mvt_real ess_fraction;      /* resample when ESS < ess_fraction * n; (0, 1], default 0.5 */
     mvt_real p_h;               /* probability of the bounding volume, (0, 1]; default 0.95 */
-    mvt_real head_quantile;     /* z quantile reported as the head height, (0, 1]; default 0.97 */
-    mvt_real exclusion_m;       /* >= 0 (0: off, the paper's independent filters); default 0.3 */
+    mvt_real head_quantile;     /* point model: z quantile reported as the head height, (0, 1];
+                                   default 0.97 (the column model reports the mean) */
+    mvt_real exclusion_m;       /* >= 0 (0: off, the paper's independent filters); default 0.5 */
     mvt_real exclusion_log;     /* >= 0; default 8 */
     mvt_real birth_sep_m;       /* > 0; default 0.5 */
     mvt_real birth_min_height_m;/* a blob track lower than this (a fragment: legs, a shadow) proposes
@@ -54,12 +63,18 @@ typedef struct mvt_pft_config {
     mvt_real support_fraction;  /* (0, 1]; default 0.25 */
     int support_min_views;      /* >= 1; default 2 */
     mvt_real lost_s;            /* > 0; default 1.0 */
+    int confirm_frames;         /* a new target is TENTATIVE until supported in this many frames,
+                                   >= 1; default 5 */
+    mvt_real tentative_lost_s;  /* a tentative target unsupported this long is deleted, > 0;
+                                   default 0.2 */
     uint64_t seed;              /* random number seed; default 1 */
 } mvt_pft_config_t;
 
 typedef struct mvt_pft_target {
     int32_t id;                 /* 0: free slot */
-    int32_t status;             /* MVT_TRACK_CONFIRMED (supported this frame) or _COASTING */
+    int32_t status;             /* MVT_TRACK_TENTATIVE (fewer than confirm_frames supported frames
+                                   since birth), _CONFIRMED (supported this frame) or _COASTING */
+    int32_t supported_frames;   /* since birth, saturating at confirm_frames */
     uint32_t cameras_used;      /* supporting cameras this frame */
     int64_t last_supported_us;
     mvt_real ess;               /* effective sample size this frame, before resampling */
@@ -74,6 +89,7 @@ typedef struct mvt_pft_counters {
     uint64_t births;
     uint64_t births_refused_full;    /* MVT_MAX_TARGETS reached */
     uint64_t deleted_lost;
+    uint64_t deleted_tentative;      /* never confirmed */
     uint64_t deleted_outside;
     uint64_t deleted_duplicate;
     uint64_t resamples;

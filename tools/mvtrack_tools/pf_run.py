@@ -4,10 +4,12 @@ Each scene is rendered (tools/mvtrack_tools/render.py: coloured bodies, fragment
 furniture, shadows, clutter; blobs derived from the masks) and run through the daemon as:
 
   pkf            the projective Kalman filter on the blobs (reference)
-  MS (paper)     --mode pf-ms --exclusion 0: independent motion-only filters, as published
-  MS+C (paper)   --mode pf --exclusion 0: with the hue/saturation cue
-  MS             --mode pf-ms: with the exclusion prior (two filters cannot share one body)
-  MS+C           --mode pf: the daemon's default particle filter
+  MS (paper)     --mode pf-ms --particle-model point --exclusion 0: independent motion-only filters
+                 whose particles are points of the body, as published
+  MS+C (paper)   --mode pf --particle-model point --exclusion 0: with the hue/saturation cue
+  MS+C point     --mode pf --particle-model point: the paper's particles with the exclusion prior
+  MS             --mode pf-ms: column particles (head-top hypotheses), exclusion prior
+  MS+C           --mode pf: the daemon's default particle filter (column, colour, exclusion)
 
 Scored: CLEAR MOT (mvtrack_tools.mot), the position error against the ground-truth head point
 (3D and horizontal), and how often the track's extent (pf: the P_H = 0.95 volume) contains the
@@ -36,8 +38,9 @@ from .render import Renderer, write_rendered
 from .rig import smartroom
 
 Q = np.array([0.5, 0.5, 0.05])
-RUNS = [("pkf", "pkf", []), ("MS (paper)", "pf-ms", ["--exclusion", "0"]), ("MS+C (paper)", "pf", ["--exclusion", "0"]),
-        ("MS", "pf-ms", []), ("MS+C", "pf", [])]
+RUNS = [("pkf", "pkf", []), ("MS (paper)", "pf-ms", ["--particle-model", "point", "--exclusion", "0"]),
+        ("MS+C (paper)", "pf", ["--particle-model", "point", "--exclusion", "0"]),
+        ("MS+C point", "pf", ["--particle-model", "point"]), ("MS", "pf-ms", []), ("MS+C", "pf", [])]
 
 
 def head_stats(gt, tr) -> dict:
@@ -73,7 +76,7 @@ def build_scene(kind: str, rig, seed: int):
     return crowd_scene(rig, 30.0, seed, n_people=4, returning=0, model=DetectorModel(dropout_cam=None))
 
 
-def run_one(out: Path, kind: str, seed: int, plot: bool) -> list[dict]:
+def run_one(out: Path, kind: str, seed: int, plot: bool, runs: list[str]) -> list[dict]:
     rig = smartroom()
     scene = build_scene(kind, rig, seed)
     log = out / "logs" / f"{kind}_{seed}.lcm"
@@ -83,6 +86,8 @@ def run_one(out: Path, kind: str, seed: int, plot: bool) -> list[dict]:
     gt = read_log(str(log), lambda c: c == "GROUND_TRUTH")
     rows = []
     for name, mode, extra in RUNS:
+        if name not in runs:
+            continue
         trk = out / "logs" / f"{kind}_{seed}_{name.replace(' ', '_').replace('(', '').replace(')', '')}.lcm"
         run_daemon(out / "rig.yaml", log, trk, mode, Q, extra + (["--publish-particles", "200"] if mode != "pkf" else []))
         tr = read_log(str(trk), lambda c: c in ("TRACKS", "MVTRACK_STATUS"))
@@ -213,6 +218,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--scenes", nargs="+", default=["interaction"], choices=["interaction", "crowd4"],
                     help="interaction: two people meet and talk (400 frames); crowd4: 4 people, 30 s")
     ap.add_argument("--jobs", type=int, default=2, help="scenes in parallel (default 2)")
+    ap.add_argument("--runs", nargs="+", default=[r[0] for r in RUNS], choices=[r[0] for r in RUNS], metavar="RUN",
+                    help="which runs (default all: " + ", ".join(repr(r[0]) for r in RUNS) + ")")
     ap.add_argument("--no-plots", action="store_true")
     a = ap.parse_args(argv)
     if not DAEMON.exists():
@@ -224,7 +231,7 @@ def main(argv: list[str] | None = None) -> int:
     jobs = [(k, s) for k in a.scenes for s in range(1, a.seeds + 1)]
     rows: list[dict] = []
     with ThreadPoolExecutor(max_workers=max(1, a.jobs)) as ex:
-        futs = [ex.submit(run_one, a.out, k, s, not a.no_plots) for k, s in jobs]
+        futs = [ex.submit(run_one, a.out, k, s, not a.no_plots, a.runs) for k, s in jobs]
         for f in tqdm(futs, desc="render + track", unit="scene"):
             rows.extend(f.result())
     order = {name: i for i, (name, _, _) in enumerate(RUNS)}
