@@ -409,7 +409,10 @@ static void test_pft_two_people_tracked_and_reproducible(void **state)
         /* the painted body is a flat-topped cylinder 0.4 m across: every point of its top is a head top */
         if (!(a.tracks[t].extent_max[0] - a.tracks[t].extent_min[0] < 0.6))
             fail_msg("column volume %.3f m long", a.tracks[t].extent_max[0] - a.tracks[t].extent_min[0]);
-        assert_true(fabs(a.tracks[t].pos_m[2] - (a.tracks[t].pos_m[1] < 2.5 ? 1.70 : 1.80)) < 0.05);
+        /* painting marks every mask pixel (about 5 cm here) a body point falls in: the painted top
+         * stands up to one pixel above the true one */
+        if (!(fabs(a.tracks[t].pos_m[2] - (a.tracks[t].pos_m[1] < 2.5 ? 1.70 : 1.80)) < 0.08))
+            fail_msg("column model: head height %.3f m at y %.2f", a.tracks[t].pos_m[2], a.tracks[t].pos_m[1]);
     }
     run_two(7, 90, 1, &b, &head_in);
     assert_memory_equal(&a, &b, sizeof(a)); /* same seed, same output, bit for bit */
