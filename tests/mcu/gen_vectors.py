@@ -2,7 +2,9 @@
 """Reference vectors for the MCU tests, computed on the host by independent code: OpenCV
 (projection with distortion, undistortion), numpy (Kalman filter with the same white-noise
 acceleration model, EKF update with a numerically differentiated OpenCV projection), exhaustive
-enumeration (assignment) and a ground-truth walk (tracker). Written as a C header.
+enumeration (assignment), a ground-truth walk (tracker), ray-cast motion masks of a standing person
+with a direct 2D convolution (particle filter) and the published PCG32 algorithm (random numbers).
+Written as a C header.
 
     gen_vectors.py OUT.h [--seed N]
 """
@@ -178,6 +180,73 @@ def main():
             dets[f, k, 1] = [rng.uniform(0, W - 1), rng.uniform(0, H - 1)]
     out.append(f"#define MCU_NF {NF}\n#define MCU_CAM2_GAP0 100\n#define MCU_CAM2_GAP1 150\n" + arr("trk_truth", walk) +
                arr("trk_dets", dets))
+    # particle filter: one person standing (head sphere + body cylinder), each camera's motion mask
+    # ray-cast at 1/4 resolution through OpenCV's lens model, stored as runs; camera 0's likelihood
+    # image D = max(g_sigma * M, p_B) by a direct 2D convolution (sigma 4 px = 1 mask pixel)
+    S = 4
+    head = np.array([3.1, 2.4, 1.74])
+    wm, hm = W // S, H // S
+    uu, vv = np.meshgrid(np.arange(wm) * S + (S - 1) / 2.0, np.arange(hm) * S + (S - 1) / 2.0)
+    pix = np.stack([uu.ravel(), vv.ravel()], 1).reshape(-1, 1, 2)
+    runs, counts = [], []
+    for c in cams:
+        xn = cv2.undistortPointsIter(pix, c["K"], c["dist"], None, None,
+                                     (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 40, 1e-10)).reshape(-1, 2)
+        R = cv2.Rodrigues(c["rvec"])[0]
+        C = -R.T @ c["tvec"]
+        D = np.concatenate([xn, np.ones((len(xn), 1))], 1) @ R
+        D /= np.linalg.norm(D, axis=1, keepdims=True)
+        o = C - (head - [0, 0, 0.11])                          # head sphere, radius 0.11
+        b = D @ o
+        hit = (b * b - (o @ o - 0.11 ** 2)) >= 0
+        ox, oy = C[0] - head[0], C[1] - head[1]                 # body cylinder, radius 0.18, 0 .. top - 0.2
+        a2 = D[:, 0] ** 2 + D[:, 1] ** 2
+        b2 = 2 * (D[:, 0] * ox + D[:, 1] * oy)
+        disc = b2 * b2 - 4 * a2 * (ox * ox + oy * oy - 0.18 ** 2)
+        for sgn in (-1, 1):
+            tc = (-b2 + sgn * np.sqrt(np.maximum(disc, 0))) / (2 * a2)
+            z = C[2] + tc * D[:, 2]
+            hit |= (disc >= 0) & (tc > 0) & (z >= 0) & (z <= head[2] - 0.2)
+        m = hit.reshape(hm, wm).astype(np.uint8)
+        r = []
+        for y in range(hm):
+            row = np.concatenate([[0], m[y], [0]])
+            d = np.diff(row)
+            for s0, s1 in zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1)):
+                r += [y * wm + s0, s1 - s0]
+        counts.append(len(r) // 2)
+        runs += r
+        if len(counts) == 1:
+            g = np.exp(-0.5 * np.arange(-3, 4) ** 2)
+            g2 = np.outer(g, g) / np.outer(g, g).sum()
+            pad = np.pad(m.astype(float), 3)
+            blur = sum(g2[dy, dx] * pad[dy:dy + hm, dx:dx + wm] for dy in range(7) for dx in range(7))
+            ys, xs = np.nonzero(m)                              # the reference around the body
+            win = [max(ys.min() - 4, 0), min(ys.max() + 5, hm), max(xs.min() - 4, 0), min(xs.max() + 5, wm)]
+            d0 = np.maximum(blur, 0.2)[win[0]:win[1], win[2]:win[3]]
+    out.append(f"#define MCU_PF_SCALE {S}\n#define MCU_PF_W {wm}\n#define MCU_PF_H {hm}\n" + arr("pf_head", head) +
+               arr("pf_run_count", counts, "int") + arr("pf_runs", runs, "int") + arr("pf_d0_window", win, "int") + arr("pf_d0", d0))
+    # PCG32 (O'Neill 2014, pcg32_srandom_r / pcg32_random_r), independent of the core's code
+    M64 = (1 << 64) - 1
+
+    def pcg32(seed, stream, n):
+        state, inc = 0, ((stream << 1) | 1) & M64
+        vals = []
+
+        def step():
+            nonlocal state
+            old = state
+            state = (old * 6364136223846793005 + inc) & M64
+            x = (((old >> 18) ^ old) >> 27) & 0xFFFFFFFF
+            rot = old >> 59
+            return ((x >> rot) | (x << ((32 - rot) & 31))) & 0xFFFFFFFF
+        step()
+        state = (state + seed) & M64
+        step()
+        for _ in range(n):
+            vals.append(step())
+        return vals
+    out.append("static const unsigned int pcg_ref[8] = {" + ", ".join(f"{v}u" for v in pcg32(42, 54, 8)) + "};\n")
     out.append("#endif\n")
     with open(a.out, "w") as fh:
         fh.write("".join(out))

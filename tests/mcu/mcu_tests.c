@@ -4,8 +4,11 @@
  * A faithful subset of the host suite, checked against references computed on the host by
  * independent code (mcu_vectors.h from gen_vectors.py: OpenCV projection, numpy Kalman filter and
  * EKF, exhaustive assignment, a ground-truth walk): camera model, constant-velocity filter,
- * projective update, assignment, and the tracker end to end with a false alarm per view, an
- * occluded view and a camera that stops sending. Prints one line per test and the figures the
+ * projective update, assignment, the tracker end to end with a false alarm per view, an
+ * occluded view and a camera that stops sending, and one particle filter's pool (the column model
+ * on ray-cast masks of a standing person; random numbers against the published PCG32). The full
+ * multi-target mvt_pft_t (3.3 MB with five 332 kB masks at the default capacities) does not fit
+ * the boards' 4 MB: the pool is run camera by camera through one mask, image and blur workspace. Prints one line per test and the figures the
  * footprint report reads (sizeof, stack high-water of one mvt_tracker_step); exit code = number
  * of failed checks.
  */
@@ -15,6 +18,7 @@
 #include "mcu_rt.h"
 #include "mcu_vectors.h"
 #include "mvt_assoc.h"
+#include "mvt_pf.h"
 #include "mvt_tracker.h"
 
 static int g_fail;
@@ -263,6 +267,116 @@ static void test_tracker(void)
     mcu_puts(" detections\n");
 }
 
+/* ---- particle filter ----------------------------------------------------------------------- */
+
+static mvt_mask_t g_pf_mask;
+static mvt_pf_image_t g_pf_img;
+static mvt_pf_blur_ws_t g_pf_blur;
+static mvt_pf_pool_t g_pf_pool, g_pf_scratch;
+static uint16_t g_pf_order[MVT_MAX_PARTICLES];
+
+static void pf_mask_of(int k)
+{
+    int first = 0;
+    for (int j = 0; j < k; j++) {
+        first += pf_run_count[j];
+    }
+    g_pf_mask.width = MCU_PF_W;
+    g_pf_mask.height = MCU_PF_H;
+    g_pf_mask.scale = MCU_PF_SCALE;
+    g_pf_mask.has_colour = 0;
+    memset(g_pf_mask.fg, 0, MCU_PF_W * MCU_PF_H);
+    for (int r = first; r < first + pf_run_count[k]; r++) {
+        memset(&g_pf_mask.fg[pf_runs[2 * r]], 1, (size_t)pf_runs[2 * r + 1]);
+    }
+}
+
+/* One filter of 1000 head-top hypotheses from a cloud 0.2 m off the person: 40 frames. */
+static void pf_run(const mvt_pf_tables_t *tab, const mvt_pf_fov_t *fovs, uint64_t seed, mvt_pf_estimate_t *est)
+{
+    mvt_rng_t rng;
+    mvt_rng_seed(&rng, seed, 7u);
+    mvt_pf_pool_t *p = &g_pf_pool;
+    p->n = MVT_MAX_PARTICLES < 1000 ? MVT_MAX_PARTICLES : 1000;
+    for (int i = 0; i < p->n; i++) {
+        mvt_real g[4];
+        mvt_rng_normal2(&rng, g);
+        mvt_rng_normal2(&rng, g + 2);
+        p->x[i] = pf_head[0] + 0.15f + 0.1f * g[0];
+        p->y[i] = pf_head[1] - 0.1f + 0.1f * g[1];
+        p->z[i] = pf_head[2] - 0.08f + 0.1f * g[2];
+        p->vx[i] = p->vy[i] = p->vz[i] = 0.0f;
+        p->h[i] = p->s[i] = 0.0f;
+    }
+    const mvt_pf_noise_t noise = {0.02f, 0.05f, 0.0f, 0.0f, 0.0f, 2.2f};
+    const mvt_pf_body_t body = {0.06f, 0.06f, 0.7f, 0.3f, 0.9f};
+    for (int f = 0; f < 40; f++) {
+        mvt_pf_predict(p, 0.04f, &noise, &rng);
+        for (int i = 0; i < p->n; i++) {
+            p->w[i] = 0.0f;
+        }
+        for (int k = 0; k < MCU_NCAM; k++) { /* one image at a time: weights add up */
+            pf_mask_of(k);
+            mvt_pf_image_build(&g_pf_img, &g_pf_mask, tab, 4.0f, &g_pf_blur);
+            mvt_pf_weight(p, &g_cams[k], &fovs[k], &g_pf_img, 1, tab, 0, &body, 0.5f, NULL);
+        }
+        const mvt_real ess = mvt_pf_normalise(p);
+        check(ess >= 1.0f, "pf effective sample size", ess, 1.0f);
+        mvt_pf_estimate(p, 0.95f, 0.0f, g_pf_order, est);
+        if (ess < 0.5f * (mvt_real)p->n) {
+            mvt_pf_resample(p, &rng, &g_pf_scratch);
+        }
+    }
+}
+
+static void test_pf(void)
+{
+    const int f0 = g_fail;
+    mvt_rng_t rng;
+    mvt_rng_seed(&rng, 42u, 54u);
+    for (int i = 0; i < 8; i++) {
+        const uint32_t v = mvt_rng_u32(&rng);
+        check(v == pcg_ref[i], "PCG32 output", (float)v, (float)pcg_ref[i]);
+    }
+    const mvt_pf_model_t model = {4.0f, 0.2f, 0.05f, 0.1f, 0.5f, 0.5f};
+    static mvt_pf_tables_t tab;
+    check(mvt_pf_tables_init(&tab, &model) == MVT_OK, "pf tables", 0, 0);
+    /* camera 0's likelihood image against the direct convolution, around the body */
+    pf_mask_of(0);
+    mvt_pf_image_build(&g_pf_img, &g_pf_mask, &tab, 4.0f, &g_pf_blur);
+    float worst_d = 0.0f;
+    const int *wn = pf_d0_window;
+    for (int y = wn[0]; y < wn[1]; y++) {
+        for (int x = wn[2]; x < wn[3]; x++) {
+            const float want = pf_d0[(y - wn[0]) * (wn[3] - wn[2]) + (x - wn[2])];
+            worst_d = fmaxf(worst_d, fabsf((float)g_pf_img.d[y * MCU_PF_W + x] / 255.0f - want));
+        }
+    }
+    check(worst_d <= 1.0f / 255.0f + 1e-3f, "pf likelihood image |D - reference|", worst_d, 1.0f / 255.0f);
+    mvt_pf_fov_t fovs[MCU_NCAM];
+    for (int k = 0; k < MCU_NCAM; k++) {
+        mvt_pf_fov_init(&fovs[k], &g_cams[k], 0.05f);
+    }
+    mvt_pf_estimate_t a, b;
+    pf_run(&tab, fovs, 5u, &a);
+    const float exy = hypotf(a.mean[0] - pf_head[0], a.mean[1] - pf_head[1]), ez = fabsf(a.head_z - pf_head[2]);
+    check(exy < 0.06f, "pf horizontal error (m)", exy, 0.06f);
+    check(ez < 0.05f, "pf head height error (m)", ez, 0.05f);
+    int inside = 1;
+    for (int i = 0; i < 3; i++) {
+        inside &= a.box_min[i] <= pf_head[i] && pf_head[i] <= a.box_max[i];
+    }
+    check(inside, "pf P_H volume contains the head", (float)inside, 1.0f);
+    pf_run(&tab, fovs, 5u, &b);
+    check(memcmp(&a, &b, sizeof(a)) == 0, "pf same seed, same estimate", 0, 0);
+    report("particle filter: column model, 4 masks, 1000 particles x 40 frames, error m", f0, "", hypotf(exy, ez), 4);
+    mcu_puts("figure sizeof_pf_pool ");
+    mcu_put_int((long long)sizeof(mvt_pf_pool_t));
+    mcu_puts("\nfigure sizeof_pf_image ");
+    mcu_put_int((long long)sizeof(mvt_pf_image_t));
+    mcu_puts("\n");
+}
+
 int main(void)
 {
     mcu_puts("mvtrack MCU tests (" MVT_MCU_NAME ", float core)\n");
@@ -271,6 +385,7 @@ int main(void)
     test_pkf();
     test_assoc();
     test_tracker();
+    test_pf();
     mcu_puts(g_fail == 0 ? "PASS " : "FAILED ");
     mcu_put_int(g_checks - g_fail);
     mcu_puts("/");
