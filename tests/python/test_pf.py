@@ -11,6 +11,7 @@ import pytest
 from mvtrack_tools.crowd import DetectorModel, interaction_scene
 from mvtrack_tools.lcmio import LogWriter, mt, read_log
 from mvtrack_tools.mot import clear_mot, pair_frames
+from mvtrack_tools.pf_run import head_stats
 from mvtrack_tools.render import Renderer, decode_runs, encode_runs, mask_frame, write_rendered
 from mvtrack_tools.rig import random_rig, smartroom
 
@@ -32,6 +33,35 @@ def run(daemon: Path, rig: Path, log: Path, out: Path, *args: str) -> subprocess
     return r
 
 
+def test_simulate_render_writes_masks_colour_and_truth(tmp_path):
+    """tools/mvtrack simulate --render: every camera message carries a mask (runs summing to its
+    size) and hue/saturation (or none with --no-colour); the blobs are where the people are."""
+    import lcm
+    import sys
+
+    for colour in (True, False):
+        log = tmp_path / f"r{colour}.lcm"
+        r = subprocess.run([sys.executable, "-m", "mvtrack_tools.simulate", "interaction", "--render", "--frames", "12",
+                            "--seed", "4", "--rig", str(tmp_path / "rig.yaml"), "--log", str(log), "--quiet",
+                            *([] if colour else ["--no-colour"])], capture_output=True, text=True, timeout=300)
+        assert r.returncode == 0, r.stderr
+        n_cam, n_gt, near = 0, 0, 0
+        rig = smartroom()
+        gt = read_log(str(log), lambda c: c == "GROUND_TRUTH")
+        for ev in lcm.EventLog(str(log), "r"):
+            if ev.channel.startswith("DETECTIONS_"):
+                m = mt.camera_frame_t.decode(ev.data)
+                n_cam += 1
+                assert m.mask_width == 192 and m.mask_height == 144 and sum(m.runs) == 192 * 144
+                assert m.num_hs == (192 * 144 if colour else 0)
+                cam = next(c for c in rig.cameras if c.name == m.camera)
+                heads = cam.project(gt.gt[min(gt.gt, key=lambda u: abs(u - m.utime))][1])
+                near += any(np.min(np.hypot(*(heads - [d.u, d.v]).T)) < 30 for d in m.detections)
+            n_gt += ev.channel == "GROUND_TRUTH"
+        assert n_gt == 12 and n_cam == 12 * 5
+        assert near >= 0.8 * n_cam  # a blob near a projected head in most views
+
+
 @pytest.mark.daemon
 def test_pf_interaction_two_identities_deterministic(daemon_path, tmp_path):
     rig = smartroom()
@@ -50,6 +80,8 @@ def test_pf_interaction_two_identities_deterministic(daemon_path, tmp_path):
     tr = read_log(str(outs[0]), lambda c: c in ("TRACKS", "MVTRACK_STATUS"))
     m = clear_mot(pair_frames(gt, tr))
     assert m.id_switches == 0 and m.mota > 0.9 and m.motp_mm < 150, m
+    hs = head_stats(gt, tr)  # the column model's P_H volume is where the head top is
+    assert hs["head_in_volume"] >= 0.9 and hs["err3d_mm"] < 100, hs
     b = read_log(str(outs[1]), lambda c: c == "TRACKS")
     for u in tr.tracks:  # same log, same seed: the same tracks bit for bit
         ta, tb = tr.tracks[u], b.tracks[u]

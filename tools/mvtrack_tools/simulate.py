@@ -7,10 +7,14 @@ Scenes:
   interaction  the paper's Experiment 2 situation: two people meet, talk close, walk around, 400 frames
 
 crowd and interaction use a detector with misses, false alarms, merged blobs, capture jitter and
-(crowd) one camera dropping out; see the options.
+(crowd) one camera dropping out; see the options. With --render they are rendered instead: each
+camera sees coloured 3D bodies (head, torso, legs), furniture, shadows and clutter; its message
+carries the motion mask (1/4 resolution), hue/saturation and the blobs of the mask's connected
+components (the input of mvtrackd --mode pf; misses, merges and false alarms come from the pixels).
 
     tools/mvtrack simulate exp1 --var 100 --occlusion --seconds 60 --rig out/rig.yaml --log out/scene.lcm
     tools/mvtrack simulate crowd --seconds 60 --seed 2 --rig out/rig.yaml --log out/crowd.lcm
+    tools/mvtrack simulate interaction --render --rig out/rig.yaml --log out/interaction_pf.lcm
 """
 from __future__ import annotations
 
@@ -85,6 +89,17 @@ def build_multi(kind: str, rig: Rig, seed: int, seconds: float | None = None, fr
     return scene, detect(scene, np.random.default_rng(seed + 7919))
 
 
+class _Buffer:
+    """Holds rendered messages so that a live run publishes them at the scene's pace (rendering is
+    slower than real time)."""
+
+    def __init__(self):
+        self.events = []
+
+    def write(self, utime, channel, msg):
+        self.events.append((utime, channel, msg))
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="mvtrack simulate", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -100,6 +115,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--jitter-ms", type=float, default=3.0, help="crowd, interaction: capture jitter, +-ms (default 3)")
     ap.add_argument("--dropout-cam", type=int, default=1, help="crowd: camera that drops out (-1: none; default 1)")
     ap.add_argument("--dropout-s", type=float, default=20.0, help="crowd: dropout start (default 20 s), lasting 4 s")
+    ap.add_argument("--render", action="store_true",
+                    help="crowd, interaction: render masks, hue/saturation and blobs from them (for --mode pf); "
+                         "--sigma, --miss, --fa and --no-merge do not apply (the pixels decide)")
+    ap.add_argument("--no-colour", action="store_true", help="with --render: masks without hue/saturation (MS)")
+    ap.add_argument("--mask-scale", type=int, default=4, help="with --render: image pixels per mask pixel (default 4)")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--rig", type=Path, required=True, help="rig file to write (CONTRACT section 2)")
     ap.add_argument("--log", type=Path, help="LCM log to write")
@@ -111,6 +131,10 @@ def main(argv: list[str] | None = None) -> int:
     if a.var <= 0 or a.seconds <= 0 or a.frames <= 0 or a.sigma <= 0 or not 0 <= a.miss < 1 or a.fa < 0 \
             or a.jitter_ms < 0:
         ap.error("--var, --seconds, --frames, --sigma must be positive; --miss in [0, 1); --fa, --jitter-ms >= 0")
+    if a.render and a.scene == "exp1":
+        ap.error("--render applies to crowd and interaction")
+    if not 1 <= a.mask_scale <= 16:
+        ap.error("--mask-scale must be in 1..16")
     rig = smartroom()
     a.rig.parent.mkdir(parents=True, exist_ok=True)
     rig.write(a.rig)
@@ -127,8 +151,21 @@ def main(argv: list[str] | None = None) -> int:
             model = DetectorModel(a.sigma, a.miss, a.fa, not a.no_merge, a.jitter_ms,
                                   None if a.dropout_cam < 0 or a.scene == "interaction" else a.dropout_cam,
                                   a.dropout_s, 4.0)
-            scene, frames = build_multi(a.scene, rig, a.seed, a.seconds, a.frames, model)
-            write_multi(sink, scene, frames, progress=not a.quiet)
+            if a.render:
+                from .render import MaskModel, Renderer, write_rendered
+
+                scene = crowd_scene(rig, a.seconds, a.seed, model=model) if a.scene == "crowd" else \
+                    interaction_scene(rig, a.frames, a.seed, model=model)
+                buf = _Buffer() if a.live is not None else sink
+                stats = write_rendered(buf, scene, Renderer(rig, MaskModel(scale=a.mask_scale), seed=a.seed), a.seed,
+                                       colour=not a.no_colour, progress=not a.quiet)
+                if a.live is not None:
+                    for ev in tqdm(buf.events, desc="publish", unit="msg", disable=a.quiet):
+                        sink.write(*ev)
+                scene.info.update(stats)
+            else:
+                scene, frames = build_multi(a.scene, rig, a.seed, a.seconds, a.frames, model)
+                write_multi(sink, scene, frames, progress=not a.quiet)
             if not a.quiet:
                 print(f"{a.scene}: {len(scene.people)} people, {scene.n_frames} frames; detector: "
                       + ", ".join(f"{k} {v}" for k, v in scene.info.items()), file=sys.stderr)
