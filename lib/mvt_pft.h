@@ -37,9 +37,10 @@ extern "C" {
 typedef struct mvt_pft_config {
     mvt_tracker_config_t det;   /* the blob-level tracker proposing births (mvt_tracker_config_default) */
     mvt_pf_model_t model;       /* likelihoods: sigma_px 4, p_b 0.2, sigma_h 0.05, sigma_s 0.1,
-                                   h_b 0.1, s_b 0.1 */
-    mvt_pf_noise_t noise;       /* pos 0.02 m^2/s, vel 1.0 m^2/s^3, colour 0.005 1/s, z_renew 0.1
-                                   over z 0..2.2 m (mvt_pft_init: z_max at least the volume's top) */
+                                   h_b 0.5, s_b 0.5 */
+    mvt_pf_noise_t noise;       /* pos 0.02 m^2/s, vel 1.0 m^2/s^3, colour 0.005 1/s, z_renew 0.2
+                                   over z 0..2.2 m (point model only; the column model never
+                                   renews heights) */
     int column;                 /* 1 (default): column model, a particle is a head-top hypothesis
                                    scored along the body under it (mvt_pf_weight); 0: the paper's
                                    point model, a particle is a point of the body */
@@ -58,7 +59,8 @@ typedef struct mvt_pft_config {
     mvt_real birth_sep_m;       /* > 0; default 0.5 */
     mvt_real birth_min_height_m;/* a blob track lower than this (a fragment: legs, a shadow) proposes
                                    no birth; default 1.0 (standing people) */
-    mvt_real birth_xy_std_m;    /* initial horizontal spread, > 0; default 0.1 */
+    mvt_real birth_xy_std_m;    /* initial horizontal spread (column model: also the head
+                                   height's), > 0; default 0.1 */
     mvt_real dup_dist_m;        /* >= 0; default 0.2 */
     mvt_real support_fraction;  /* (0, 1]; default 0.25 */
     int support_min_views;      /* >= 1; default 2 */
