@@ -32,6 +32,24 @@ from .simulate import build_multi, write_multi
 Q = np.array([0.5, 0.5, 0.05])  # the daemon's default white-acceleration density
 
 
+def run_scenes(ap: argparse.ArgumentParser, a: argparse.Namespace, run_one, *args) -> list[dict]:
+    """Checks the common options (--out, --seeds, --scenes, --jobs), writes the rig, then runs
+    run_one(out, scene, seed, *args) for every scene and seed in parallel with a progress bar."""
+    if not DAEMON.exists():
+        ap.error(f"{DAEMON} not built: run tools/mvtrack build")
+    if a.seeds < 1:
+        ap.error("--seeds must be >= 1")
+    (a.out / "logs").mkdir(parents=True, exist_ok=True)
+    smartroom().write(a.out / "rig.yaml")
+    jobs = [(k, s) for k in a.scenes for s in range(1, a.seeds + 1)]
+    rows: list[dict] = []
+    with ThreadPoolExecutor(max_workers=max(1, a.jobs)) as ex:
+        futs = [ex.submit(run_one, a.out, k, s, *args) for k, s in jobs]
+        for f in tqdm(futs, desc="scenes", unit="scene"):
+            rows.extend(f.result())
+    return rows
+
+
 def run_one(out: Path, kind: str, seed: int, merges: list[str], plot: bool) -> list[dict]:
     rig = smartroom()
     rig_path = out / "rig.yaml"
@@ -73,19 +91,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--jobs", type=int, default=2, help="runs in parallel (default 2)")
     ap.add_argument("--no-plots", action="store_true")
     a = ap.parse_args(argv)
-    if not DAEMON.exists():
-        ap.error(f"{DAEMON} not built: run tools/mvtrack build")
-    if a.seeds < 1:
-        ap.error("--seeds must be >= 1")
     out = a.out
-    (out / "logs").mkdir(parents=True, exist_ok=True)
-    smartroom().write(out / "rig.yaml")
-    jobs = [(k, s) for k in a.scenes for s in range(1, a.seeds + 1)]
-    rows: list[dict] = []
-    with ThreadPoolExecutor(max_workers=max(1, a.jobs)) as ex:
-        futs = [ex.submit(run_one, out, k, s, a.merge, not a.no_plots) for k, s in jobs]
-        for f in tqdm(futs, desc="scenes", unit="run"):
-            rows.extend(f.result())
+    rows = run_scenes(ap, a, run_one, a.merge, not a.no_plots)
     rows.sort(key=lambda r: (r["scene"], r["merge"], r["seed"]))
     (out / "summary.json").write_text(json.dumps(rows, indent=1, default=float))
     print(f"{'scene':12s} {'merge':8s} {'seed':>4s} {'MOTA':>6s} {'MOTP mm':>8s} {'IDsw':>5s} {'IDF1':>6s} "

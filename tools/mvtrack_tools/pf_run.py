@@ -23,17 +23,15 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
-from tqdm import tqdm
 
 from .crowd import DetectorModel, crowd_scene, interaction_scene
 from .experiment1 import run_daemon
 from .lcmio import LogWriter, mt, read_log
 from .mot import as_dict, clear_mot, pair_frames
-from .paths import DAEMON
+from .mot_run import run_scenes
 from .render import Renderer, write_rendered
 from .rig import smartroom
 
@@ -222,18 +220,7 @@ def main(argv: list[str] | None = None) -> int:
                     help="which runs (default all: " + ", ".join(repr(r[0]) for r in RUNS) + ")")
     ap.add_argument("--no-plots", action="store_true")
     a = ap.parse_args(argv)
-    if not DAEMON.exists():
-        ap.error(f"{DAEMON} not built: run tools/mvtrack build")
-    if a.seeds < 1:
-        ap.error("--seeds must be >= 1")
-    (a.out / "logs").mkdir(parents=True, exist_ok=True)
-    smartroom().write(a.out / "rig.yaml")
-    jobs = [(k, s) for k in a.scenes for s in range(1, a.seeds + 1)]
-    rows: list[dict] = []
-    with ThreadPoolExecutor(max_workers=max(1, a.jobs)) as ex:
-        futs = [ex.submit(run_one, a.out, k, s, not a.no_plots, a.runs) for k, s in jobs]
-        for f in tqdm(futs, desc="render + track", unit="scene"):
-            rows.extend(f.result())
+    rows = run_scenes(ap, a, run_one, not a.no_plots, a.runs)
     order = {name: i for i, (name, _, _) in enumerate(RUNS)}
     rows.sort(key=lambda r: (r["scene"], r["seed"], order[r["run"]]))
     (a.out / "summary.json").write_text(json.dumps(rows, indent=1, default=float))
