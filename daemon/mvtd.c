@@ -476,6 +476,13 @@ void mvtd_handle(daemon_state_t *d, const char *channel, const void *data, uint3
         o->score = (mvt_real)s->score;
         o->hue = (mvt_real)s->hue;
         o->saturation = (mvt_real)s->saturation;
+        const int box_ok = isfinite(s->bbox[0]) && isfinite(s->bbox[1]) && isfinite(s->bbox[2]) &&
+                           isfinite(s->bbox[3]) && s->bbox[2] > s->bbox[0] && s->bbox[3] > s->bbox[1] &&
+                           fabsf(s->bbox[0]) < 1e6f && fabsf(s->bbox[1]) < 1e6f && fabsf(s->bbox[2]) < 1e6f &&
+                           fabsf(s->bbox[3]) < 1e6f;
+        for (int j = 0; j < 4; j++) {
+            o->box[j] = box_ok ? (mvt_real)s->bbox[j] : (mvt_real)0; /* unknown: explains no occlusion */
+        }
     }
     int idx[MVT_MAX_DETECTIONS];
     const int kept = mvt_tracker_select(d->trk, cam, in, n_in, idx);
@@ -561,9 +568,14 @@ static void usage(FILE *f)
             "                                   (MS+C; MS when a camera sends no colour); needs masks\n"
             "                      pf-ms        the same, motion masks only (colour ignored)\n"
             "  --particles N       pf: particles per person, 16..%d (default %d)\n"
-            "  --exclusion M       pf: particles within M metres (horizontally) of another person's\n"
-            "                      centre are penalised, so two filters cannot share one body;\n"
-            "                      0 = off, the paper's independent filters (default 0.5)\n"
+            "  --exclusion M       two people's heads are at least M metres apart horizontally\n"
+            "                      (default 0.5; 0 = off). pf: particles closer to another person's\n"
+            "                      centre are penalised, so two filters cannot share one body (0: the\n"
+            "                      paper's independent filters); other modes: a track seen by fewer\n"
+            "                      than two cameras is kept this far from the others\n"
+            "  --occlusion box|off a confirmed track a camera did not update although it lies inside\n"
+            "                      the box of a blob given to another track is hidden there: box\n"
+            "                      (default) keeps it in the box's columns and alive; off: missed\n"
             "  --particle-model column|point\n"
             "                      pf: column (default): a particle is a head-top hypothesis, each\n"
             "                      camera scores the body under it and the background above it;\n"
@@ -582,7 +594,9 @@ static void usage(FILE *f)
             "                      first message (default 20)\n"
             "  --merge P           a detection inside the gates of two tracks that one camera cannot\n"
             "                      tell apart (a merged blob): neither (default: update neither),\n"
-            "                      share (update both, covariance widened), off (one-to-one only)\n"
+            "                      share (update both, covariance widened), off (one-to-one only),\n"
+            "                      top (the detector's rule: the higher head gets it when the order\n"
+            "                      is clear, otherwise neither)\n"
             "  --verbose           print a line per status period\n"
             "  --help              this text\n"
             "\n"
@@ -659,8 +673,8 @@ static int option_choice(const char *opt_name, const char *arg, const char *cons
 
 int mvtd_configure(daemon_state_t *d, int argc, char **argv)
 {
-    const char *rig_path = NULL, *in_url = MVTD_DEFAULT_URL, *out_url = NULL, *mode = "pkf", *gate = "chi2", *merge = "neither",
-               *particle_model = "column";
+    const char *rig_path = NULL, *in_url = MVTD_DEFAULT_URL, *out_url = NULL, *mode = "pkf", *gate = "chi2",
+               *merge = "neither", *occlusion = "box", *particle_model = "column";
     double sigma_px = 2.0, deadline_ms = 20.0, gate_chi2 = 13.8;
     mvt_real q[3] = {MVT_R(0.5), MVT_R(0.5), MVT_R(0.05)};
     static const struct option opts[] = {
@@ -670,6 +684,7 @@ int mvtd_configure(daemon_state_t *d, int argc, char **argv)
         {"q", required_argument, 0, 'q'},        {"sigma-px", required_argument, 0, 's'},
         {"deadline-ms", required_argument, 0, 'd'}, {"verbose", no_argument, 0, 'v'},
         {"merge", required_argument, 0, 'M'},    {"help", no_argument, 0, 'h'},
+        {"occlusion", required_argument, 0, 'O'},
         {"particles", required_argument, 0, 'P'}, {"exclusion", required_argument, 0, 'X'},
         {"seed", required_argument, 0, 'S'},     {"publish-particles", required_argument, 0, 'Q'},
         {"particle-model", required_argument, 0, 'B'}, {0, 0, 0, 0}};
@@ -677,7 +692,7 @@ int mvtd_configure(daemon_state_t *d, int argc, char **argv)
     optind = 1; /* callable more than once (tests, fuzzer) */
     long particles = MVT_MAX_PARTICLES, seed = 1, publish_particles = 0;
     double exclusion_m = 0.5;
-    while ((opt = getopt_long(argc, argv, "r:i:o:m:g:c:q:s:d:M:vhP:X:S:Q:B:", opts, NULL)) != -1) {
+    while ((opt = getopt_long(argc, argv, "r:i:o:m:g:c:q:s:d:M:O:vhP:X:S:Q:B:", opts, NULL)) != -1) {
         switch (opt) {
         case 'r': rig_path = optarg; break;
         case 'i': in_url = optarg; break;
@@ -685,6 +700,7 @@ int mvtd_configure(daemon_state_t *d, int argc, char **argv)
         case 'm': mode = optarg; break;
         case 'g': gate = optarg; break;
         case 'M': merge = optarg; break;
+        case 'O': occlusion = optarg; break;
         case 'B': particle_model = optarg; break;
         case 'c':
             if (option_pos("--gate-chi2", optarg, &gate_chi2) != 0) {
@@ -750,13 +766,15 @@ int mvtd_configure(daemon_state_t *d, int argc, char **argv)
     mvt_tracker_config_default(&cfg);
     static const char *const modes[] = {"pkf", "ekf", "pkf-paper", "pkf-centred", "kf", "pf", "pf-ms"};
     static const char *const gates[] = {"chi2", "paper"};
-    static const char *const merges[] = {"neither", "share", "off"};
+    static const char *const merges[] = {"neither", "share", "off", "top"};
     static const char *const particle_models[] = {"column", "point"};
     const int mi = option_choice("--mode", mode, modes, 7);
     const int gi = option_choice("--gate", gate, gates, 2);
-    const int ri = option_choice("--merge", merge, merges, 3);
+    const int ri = option_choice("--merge", merge, merges, 4);
     const int bi = option_choice("--particle-model", particle_model, particle_models, 2);
-    if (mi < 0 || gi < 0 || ri < 0 || bi < 0) {
+    static const char *const occlusions[] = {"box", "off"};
+    const int oi = option_choice("--occlusion", occlusion, occlusions, 2);
+    if (mi < 0 || gi < 0 || ri < 0 || bi < 0 || oi < 0) {
         return 2;
     }
     static const mvt_pkf_lin_t mode_lin[] = {MVT_PKF_JACOBIAN, MVT_PKF_JACOBIAN, MVT_PKF_PAPER,
@@ -765,9 +783,11 @@ int mvtd_configure(daemon_state_t *d, int argc, char **argv)
     cfg.lin = mode_lin[mi];
     cfg.filter = mi == 4 ? MVT_FILTER_TRIANGULATE : MVT_FILTER_PROJECTIVE;
     cfg.gate = gi == 0 ? MVT_GATE_CHI2 : MVT_GATE_PAPER;
-    static const mvt_merge_t merge_of[] = {MVT_MERGE_NEITHER, MVT_MERGE_SHARE, MVT_MERGE_OFF};
+    static const mvt_merge_t merge_of[] = {MVT_MERGE_NEITHER, MVT_MERGE_SHARE, MVT_MERGE_OFF, MVT_MERGE_TOP};
     cfg.merge = merge_of[ri];
     cfg.gate_chi2 = (mvt_real)gate_chi2;
+    cfg.occlusion = oi == 0;
+    cfg.exclusion_m = (mvt_real)exclusion_m;
     memcpy(cfg.q_m2s3, q, sizeof(q));
     d->mode_name = mode;
 

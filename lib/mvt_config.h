@@ -63,6 +63,7 @@ typedef double mvt_real;
 #define MVT_ATAN2 atan2
 #define MVT_EXP exp
 #define MVT_LOG log
+#define MVT_ERFC erfc
 #define MVT_EPS 2.220446049250313e-16
 #else
 typedef float mvt_real;
@@ -73,6 +74,7 @@ typedef float mvt_real;
 #define MVT_ATAN2 atan2f
 #define MVT_EXP expf
 #define MVT_LOG logf
+#define MVT_ERFC erfcf
 #define MVT_EPS 1.1920929e-7f
 #endif
 

@@ -1,6 +1,7 @@
 #include "mvt_cv.h"
 
 #include <math.h>
+#include <stddef.h>
 #include <string.h>
 
 #include "mvt_linalg.h"
@@ -181,4 +182,90 @@ mvt_err_t mvt_cv_repair(mvt_cv_state_t *s, mvt_real var_floor)
         }
     }
     return mvt_la_cholesky(3, a);
+}
+
+/* Mass, mean and variance of the standard normal truncated to [a, b] (a < b). The mass comes from
+ * erfc on the side of the tails, so a band far out in one tail keeps its relative precision; a
+ * band narrow against the unit prior falls back to the uniform limit (mean at the density-weighted
+ * centre, variance width^2 / 12), where the closed form cancels catastrophically. */
+static void truncated_std_normal(mvt_real a, mvt_real b, mvt_real *mass, mvt_real *mean, mvt_real *var)
+{
+    const mvt_real r2 = MVT_R(0.70710678118654752);
+    const mvt_real inv_sqrt_2pi = MVT_R(0.39894228040143268);
+    mvt_real z;
+    if (a >= MVT_R(0.0)) {
+        z = MVT_R(0.5) * (MVT_ERFC(a * r2) - MVT_ERFC(b * r2));
+    } else if (b <= MVT_R(0.0)) {
+        z = MVT_R(0.5) * (MVT_ERFC(-b * r2) - MVT_ERFC(-a * r2));
+    } else {
+        z = MVT_R(1.0) - MVT_R(0.5) * (MVT_ERFC(b * r2) + MVT_ERFC(-a * r2));
+    }
+    *mass = z;
+    const mvt_real w = b - a;
+    if (w < MVT_R(0.05)) {
+        const mvt_real c = MVT_R(0.5) * (a + b);
+        *var = w * w / MVT_R(12.0);
+        *mean = c - c * *var; /* the density's slope tilts the uniform: d log phi / dx = -x */
+        return;
+    }
+    const mvt_real pa = inv_sqrt_2pi * MVT_EXP(MVT_R(-0.5) * a * a);
+    const mvt_real pb = inv_sqrt_2pi * MVT_EXP(MVT_R(-0.5) * b * b);
+    const mvt_real m = (pa - pb) / z;
+    mvt_real v = MVT_R(1.0) + (a * pa - b * pb) / z - m * m;
+    if (!(v > MVT_R(1e-6))) { /* rounding: never negative, never a spike */
+        const mvt_real u = w * w / MVT_R(12.0);
+        v = u < MVT_R(1.0) ? u : MVT_R(1.0);
+    }
+    *mean = m;
+    *var = v < MVT_R(1.0) ? v : MVT_R(1.0);
+}
+
+mvt_err_t mvt_cv_truncate(mvt_cv_state_t *s, const mvt_real H[3], mvt_real value, mvt_real lo, mvt_real hi,
+                          mvt_real *mass)
+{
+    return mvt_cv_truncate_ex(s, H, value, MVT_R(0.0), lo, hi, mass);
+}
+
+mvt_err_t mvt_cv_truncate_ex(mvt_cv_state_t *s, const mvt_real H[3], mvt_real value, mvt_real extra_var, mvt_real lo,
+                             mvt_real hi, mvt_real *mass)
+{
+    if (mass != NULL) {
+        *mass = MVT_R(0.0);
+    }
+    if (!isfinite(lo) || !isfinite(hi) || !(lo < hi) || !isfinite(value) || !(extra_var >= MVT_R(0.0)) ||
+        !isfinite(extra_var)) {
+        return MVT_ERR_INVALID;
+    }
+    const mvt_real *P = s->P;
+    mvt_real hpP[6], k[6];
+    for (int j = 0; j < 6; j++) {
+        hpP[j] = H[0] * P[0 * 6 + j] + H[1] * P[1 * 6 + j] + H[2] * P[2 * 6 + j];
+    }
+    const mvt_real s2 = hpP[0] * H[0] + hpP[1] * H[1] + hpP[2] * H[2] + extra_var;
+    if (!(s2 > MVT_R(0.0)) || !isfinite(s2)) {
+        return MVT_ERR_NUMERIC;
+    }
+    const mvt_real sd = MVT_SQRT(s2);
+    mvt_real z, m, v;
+    truncated_std_normal((lo - value) / sd, (hi - value) / sd, &z, &m, &v);
+    if (mass != NULL) {
+        *mass = z;
+    }
+    if (!(z >= MVT_R(1e-6))) {
+        return MVT_ERR_NUMERIC;
+    }
+    const mvt_real gain = MVT_R(1.0) - v; /* K = (s2 - v') / s2 of the equivalent measurement */
+    if (!(gain > MVT_R(1e-4))) {
+        return MVT_OK; /* the band is wide open around the prior: nothing learnt */
+    }
+    /* equivalent measurement: R = s2 v' / (s2 - v'), S = s2 + R = s2 / gain, and the innovation y
+     * with value + K y = value + sd m, i.e. y = sd m / gain */
+    const mvt_real S = s2 / gain;
+    const mvt_real y = sd * m / gain;
+    for (int i = 0; i < 6; i++) {
+        k[i] = hpP[i] / S;
+        s->x[i] += k[i] * y;
+    }
+    mvt_cv_joseph_hp(s, 1, hpP, &S, k);
+    return MVT_OK;
 }

@@ -46,6 +46,23 @@ mvt_err_t mvt_cv_update_point(mvt_cv_state_t *s, const mvt_real z[3], const mvt_
  * definite. MVT_ERR_NUMERIC if the position block is not PD after repair. */
 mvt_err_t mvt_cv_repair(mvt_cv_state_t *s, mvt_real var_floor);
 
+/* Constrains the position to lo <= H x <= hi (H: one row on the position, value: H x's current
+ * value, or a linearised model's prediction of it): the Gaussian prior of H x (mean value,
+ * variance H Ppp H^T) is truncated to [lo, hi] and the state moved to the truncated normal's mean
+ * and variance along H (Simon and Simon's PDF truncation, applied as one scalar Kalman update
+ * with the equivalent measurement, so velocity follows through the cross-covariance). *mass (may
+ * be NULL) receives the prior probability of [lo, hi]. MVT_ERR_INVALID unless lo < hi (finite),
+ * MVT_ERR_NUMERIC when [lo, hi] holds less than 1e-6 of the prior. A band much wider than the
+ * prior around the mean changes (almost) nothing. ~150 flops. */
+mvt_err_t mvt_cv_truncate(mvt_cv_state_t *s, const mvt_real H[3], mvt_real value, mvt_real lo, mvt_real hi,
+                          mvt_real *mass);
+
+/* mvt_cv_truncate of a functional H x + w, w an independent zero-mean term of variance extra_var
+ * (another state's share of a joint constraint, e.g. H x_a - H x_b with x_b's variance): the
+ * truncation acts on the sum, this state takes its share of the update. extra_var >= 0. */
+mvt_err_t mvt_cv_truncate_ex(mvt_cv_state_t *s, const mvt_real H[3], mvt_real value, mvt_real extra_var, mvt_real lo,
+                             mvt_real hi, mvt_real *mass);
+
 /* Joseph-form covariance update for a measurement that observes only the position:
  * P <- (I - K H) P (I - K H)^T + K R K^T with H = [Hp 0] (m x 3 block), K (6 x m), R (m x m),
  * all row-major, m <= 3. Shared by the point and projective updates. */

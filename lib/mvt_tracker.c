@@ -49,6 +49,10 @@ void mvt_tracker_config_default(mvt_tracker_config_t *c)
     c->dup_dist_m = MVT_R(0.25);
     c->exit_margin_m = MVT_R(0.5);
     c->exit_coast_s = MVT_R(0.3);
+    c->occlusion = 1;
+    c->body_halfwidth_m = MVT_R(0.2);
+    c->occluded_max_s = MVT_R(10.0);
+    c->exclusion_m = MVT_R(0.4);
 }
 
 static int config_ok(const mvt_tracker_config_t *c)
@@ -70,7 +74,11 @@ static int config_ok(const mvt_tracker_config_t *c)
            c->merge_ambiguity >= MVT_R(0.0) && isfinite(c->merge_ambiguity) &&
            isfinite(c->dup_dist_m) && c->exit_margin_m >= MVT_R(0.0) && isfinite(c->exit_margin_m) &&
            c->exit_coast_s > MVT_R(0.0) && isfinite(c->exit_coast_s) &&
-           (c->merge == MVT_MERGE_NEITHER || c->merge == MVT_MERGE_SHARE || c->merge == MVT_MERGE_OFF) &&
+           (c->occlusion == 0 || c->occlusion == 1) && c->body_halfwidth_m >= MVT_R(0.0) &&
+           isfinite(c->body_halfwidth_m) && c->occluded_max_s > MVT_R(0.0) && isfinite(c->occluded_max_s) &&
+           c->exclusion_m >= MVT_R(0.0) && isfinite(c->exclusion_m) &&
+           (c->merge == MVT_MERGE_NEITHER || c->merge == MVT_MERGE_SHARE || c->merge == MVT_MERGE_OFF ||
+            c->merge == MVT_MERGE_TOP) &&
            (c->filter == MVT_FILTER_PROJECTIVE || c->filter == MVT_FILTER_TRIANGULATE) &&
            (c->gate == MVT_GATE_CHI2 || c->gate == MVT_GATE_PAPER) &&
            (c->lin == MVT_PKF_JACOBIAN || c->lin == MVT_PKF_PAPER || c->lin == MVT_PKF_PAPER_CENTRED);
@@ -142,6 +150,9 @@ static void step_projective(mvt_tracker_t *self, const mvt_frame_t *frame, const
         int assign[MVT_MAX_TARGETS];
         uint8_t merged[MVT_MAX_TARGETS];
         mvt_trk_associate(self, k, assign, merged);
+        if (c->occlusion) {
+            mvt_trk_occlusion(self, &frame->views[k], k, assign);
+        }
         for (int t = 0; t < MVT_MAX_TARGETS; t++) {
             mvt_track_t *tr = &self->tracks[t];
             if (tr->id == 0 || assign[t] < 0) {
@@ -295,12 +306,16 @@ mvt_err_t mvt_tracker_step(mvt_tracker_t *self, const mvt_frame_t *frame, mvt_ou
     }
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         self->tracks[t].cameras_used = 0u;
+        self->tracks[t].cameras_occluded = 0u;
     }
 
     if (self->cfg.filter == MVT_FILTER_PROJECTIVE) {
         step_projective(self, frame, order, n_order);
     } else {
         step_triangulate(self, frame, order, n_order);
+    }
+    if (self->cfg.exclusion_m > MVT_R(0.0)) {
+        mvt_trk_exclusion(self);
     }
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         if (self->tracks[t].id != 0) {

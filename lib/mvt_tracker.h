@@ -46,7 +46,11 @@ typedef enum mvt_merge {
                               other views decide */
     MVT_MERGE_SHARE = 1,   /* ... updates both, its covariance widened by D D^T / 3 (D: the image
                               separation of the two predictions) */
-    MVT_MERGE_OFF = 2      /* strict one-to-one assignment, no merged-blob handling */
+    MVT_MERGE_OFF = 2,     /* strict one-to-one assignment, no merged-blob handling */
+    MVT_MERGE_TOP = 3      /* the detector's own rule (CONTRACT: the blob's top point): the detection
+                              belongs to the track whose predicted head is the higher in the image
+                              when the order is clear (2 sigma of the two predictions' v apart):
+                              the other is hidden in the blob; otherwise as MVT_MERGE_NEITHER */
 } mvt_merge_t;
 
 typedef enum mvt_gate {
@@ -102,6 +106,19 @@ typedef struct mvt_tracker_config {
                                    volume's side walls is deleted (people leave through the sides);
                                    >= 0, default 0.5 */
     mvt_real exit_coast_s;      /* > 0, default 0.3 */
+    int occlusion;              /* 1 (default): a confirmed track that a camera did not update
+                                   although its predicted head lies in the box of a blob that camera
+                                   gave to another track is taken as hidden in that blob: its image
+                                   column is constrained to the box (mvt_pkf_truncate_u) and the
+                                   view counts toward keeping it alive (occluded_max_s); 0: off */
+    mvt_real body_halfwidth_m;  /* half a person's width: a hidden head lies at least this far
+                                   inside the blob's side edges; >= 0, default 0.2 */
+    mvt_real occluded_max_s;    /* a track kept alive by occluded views alone is deleted after this
+                                   long without enough real views; > 0, default 10 */
+    mvt_real exclusion_m;       /* two people's heads are at least this far apart horizontally: a
+                                   track seen in fewer than seen_min_views cameras this frame is kept
+                                   this far from every track seen in more (mvt_cv_truncate along
+                                   their horizontal separation); >= 0 (0: off), default 0.4 */
 } mvt_tracker_config_t;
 
 /* One detection as the core needs it (raw distorted pixels). */
@@ -110,6 +127,8 @@ typedef struct mvt_detection {
     mvt_real sigma_px;    /* <= 0: the camera's default */
     mvt_real score;       /* [0, 1] */
     mvt_real hue, saturation; /* < 0 unknown */
+    mvt_real box[4];      /* the blob's box x_min, y_min, x_max, y_max in raw pixels; unknown
+                             (all zero) unless finite with x_max > x_min and y_max > y_min */
 } mvt_detection_t;
 
 /* What one camera delivered for this frame set. */
@@ -165,12 +184,18 @@ typedef struct mvt_counters {
     uint64_t deleted_exit;            /*   unseen for exit_coast_s near a side wall */
     uint64_t deleted_uncertain;       /*   position std above max_pos_std_m */
     uint64_t deleted_outside;         /*   left the volume (plus margin) */
+    uint64_t deleted_occluded;        /*   kept by occluded views alone for occluded_max_s */
     uint64_t merged_updates;          /* MVT_MERGE_SHARE: updates from a detection shared by
                                          unresolved tracks */
     uint64_t merged_ambiguous;        /* MVT_MERGE_NEITHER: track-camera updates withheld because
                                          the detection was inside an unresolved neighbour's gate */
+    uint64_t merged_top;              /* MVT_MERGE_TOP: detections moved to the higher of two
+                                         unresolved tracks */
     uint64_t duplicates_deleted;      /* tracks deleted as duplicates (dup_dist_m) */
     uint64_t birth_candidates_dropped;/* multi-view birth candidates beyond MVT_MAX_BIRTH_CANDIDATES */
+    uint64_t occluded_updates;        /* track-camera pairs explained as hidden in another track's
+                                         blob and constrained to its box (occlusion) */
+    uint64_t exclusion_updates;       /* poorly seen tracks pushed out to exclusion_m from a seen one */
 } mvt_counters_t;
 
 typedef struct mvt_track {
@@ -178,9 +203,11 @@ typedef struct mvt_track {
     int32_t status;
     mvt_cv_state_t s;
     uint32_t cameras_used;      /* this frame */
+    uint32_t cameras_occluded;  /* this frame: cameras that explained the track as hidden */
     uint32_t hit_history;       /* bit 0: this frame had an update, bit 1: previous, ... */
     int32_t misses;             /* consecutive frames not seen (seen_min_views) */
     int64_t last_update_us;     /* last frame seen */
+    int64_t last_explained_us;  /* last frame seen, or seen and hidden in enough views */
 } mvt_track_t;
 
 /* Multi-view birth candidates examined per frame (the best are kept; the excess is counted). */

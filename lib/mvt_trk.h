@@ -14,6 +14,16 @@
  * the assigned detections used. O(T * D) gating + O(cluster^2 * (cluster + D)) assignment. */
 void mvt_trk_associate(mvt_tracker_t *self, int k, int assign[MVT_MAX_TARGETS], uint8_t merged[MVT_MAX_TARGETS]);
 
+/* Occlusion hypotheses for camera k after associate (view: its detections and boxes, assign: as
+ * filled by mvt_trk_associate): confirmed tracks left without a detection whose predicted head
+ * lies in the box of a blob another track took are constrained to that box's column band and
+ * marked in cameras_occluded. O(T * D). */
+void mvt_trk_occlusion(mvt_tracker_t *self, const mvt_view_t *view, int k, const int assign[MVT_MAX_TARGETS]);
+
+/* Exclusion after the frame's updates: every confirmed track seen in fewer than seen_min_views
+ * cameras is kept exclusion_m (horizontally) from every track seen in at least that many. O(T^2). */
+void mvt_trk_exclusion(mvt_tracker_t *self);
+
 /* Confirmation, coasting and deletion after the frame's updates. O(T). */
 void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us);
 

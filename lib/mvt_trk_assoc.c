@@ -64,6 +64,19 @@ static int ambiguous(const mvt_tracker_t *self, int k, int t, int u, int d)
     return neg2_loglik(self, k, t, d) - neg2_loglik(self, k, u, d) < self->cfg.merge_ambiguity;
 }
 
+/* Image order of two tracks' predicted heads: -1 when t is clearly above u (smaller v by more
+ * than two standard deviations of the difference), +1 when clearly below, 0 when unclear. */
+static int top_order(const mvt_tracker_t *self, int t, int u)
+{
+    const mvt_pkf_pred_t *a = &self->pred[t], *b = &self->pred[u];
+    const mvt_real dv = a->h[1] - b->h[1];
+    const mvt_real sd = MVT_SQRT(a->hph[2] + b->hph[2]);
+    if (dv < MVT_R(-2.0) * sd) {
+        return -1;
+    }
+    return dv > MVT_R(2.0) * sd ? 1 : 0;
+}
+
 static void hypothesise(mvt_tracker_t *self, int k, const int live[], int n_live)
 {
     const mvt_tracker_config_t *c = &self->cfg;
@@ -238,6 +251,29 @@ void mvt_trk_associate(mvt_tracker_t *self, int k, int assign[MVT_MAX_TARGETS], 
 
     /* merged blobs: a track left without a detection whose gate holds the detection of an
      * unresolved neighbour */
+    if (self->cfg.merge == MVT_MERGE_TOP) {
+        /* the blob's top is the higher head: a detection the assignment gave to the lower of two
+         * unresolved tracks goes to the higher one when it lies in its gate */
+        for (int i = 0; i < n_live; i++) {
+            const int t = live[i];
+            if (assign[t] >= 0 || self->merge_nb[t] < 0) {
+                continue;
+            }
+            for (int j = 0; j < n_live; j++) {
+                const int u = live[j];
+                mvt_real d2;
+                const int d = assign[u];
+                if (u == t || d < 0 || self->cost[t][d] < MVT_R(0.0) || !unresolved(self, &self->cams[k], t, u, &d2) ||
+                    top_order(self, t, u) >= 0) {
+                    continue;
+                }
+                assign[t] = d;
+                assign[u] = -1;
+                self->counters.merged_top++;
+                break;
+            }
+        }
+    }
     if (self->cfg.merge != MVT_MERGE_OFF) {
         int shared[MVT_MAX_TARGETS];
         for (int i = 0; i < n_live; i++) {
@@ -253,7 +289,8 @@ void mvt_trk_associate(mvt_tracker_t *self, int k, int assign[MVT_MAX_TARGETS], 
                 const int d = assign[u];
                 if (u == t || d < 0 || self->cost[t][d] < MVT_R(0.0) ||
                     !unresolved(self, &self->cams[k], t, u, &d2) ||
-                    (self->cfg.merge == MVT_MERGE_NEITHER && !ambiguous(self, k, t, u, d))) {
+                    (self->cfg.merge == MVT_MERGE_TOP && top_order(self, t, u) != 0) ||
+                    (self->cfg.merge != MVT_MERGE_SHARE && !ambiguous(self, k, t, u, d))) {
                     continue;
                 }
                 if (shared[t] < 0 || self->cost[t][d] < best) {

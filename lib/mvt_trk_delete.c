@@ -83,8 +83,12 @@ void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us)
         if (hit) {
             tr->misses = 0;
             tr->last_update_us = now_us;
+            tr->last_explained_us = now_us;
         } else {
             tr->misses++;
+            if (views + popcount32(tr->cameras_occluded) >= min_views) {
+                tr->last_explained_us = now_us; /* hidden in other tracks' blobs, not lost */
+            }
         }
         uint64_t *reason = NULL; /* the counter of the deletion's reason */
         if (mvt_cv_repair(&tr->s, c->var_floor_m2) != MVT_OK) {
@@ -94,6 +98,7 @@ void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us)
         const mvt_real *P = tr->s.P;
         const mvt_real var_max = c->max_pos_std_m * c->max_pos_std_m;
         const mvt_real unseen_s = mvt_us_to_s(now_us - tr->last_update_us);
+        const mvt_real lost_s = mvt_us_to_s(now_us - tr->last_explained_us);
         switch (tr->status) {
         case MVT_TRACK_TENTATIVE:
             if (tr->misses >= c->tentative_max_misses) {
@@ -105,9 +110,11 @@ void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us)
         case MVT_TRACK_CONFIRMED:
         case MVT_TRACK_COASTING:
             tr->status = tr->cameras_used != 0u ? MVT_TRACK_CONFIRMED : MVT_TRACK_COASTING;
-            if (unseen_s > c->coast_max_s) {
+            if (lost_s > c->coast_max_s) {
                 reason = &self->counters.deleted_unseen;
-            } else if (unseen_s > c->exit_coast_s && near_side_wall(c, tr->s.x)) {
+            } else if (unseen_s > c->occluded_max_s) {
+                reason = &self->counters.deleted_occluded;
+            } else if (lost_s > c->exit_coast_s && near_side_wall(c, tr->s.x)) {
                 reason = &self->counters.deleted_exit;
             }
             break;

@@ -8,12 +8,13 @@ For each scene and seed: simulate (tools/mvtrack simulate), run mvtrackd offline
 CLEAR MOT and OSPA (mvtrack_tools.mot), write a zenithal plot and a timeline per run. Prints a
 table and writes summary.json. `--merge` runs the daemon's merged-blob policies side by side.
 
-    tools/mvtrack mot [--seeds 3] [--merge neither share off] [--out out/mot]
+    tools/mvtrack mot [--seeds 3] [--merge neither share off top] [--daemon-args ARGS] [--out out/mot]
 """
 from __future__ import annotations
 
 import argparse
 import json
+import shlex
 import sys
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -50,7 +51,7 @@ def run_scenes(ap: argparse.ArgumentParser, a: argparse.Namespace, run_one, *arg
     return rows
 
 
-def run_one(out: Path, kind: str, seed: int, merges: list[str], plot: bool) -> list[dict]:
+def run_one(out: Path, kind: str, seed: int, merges: list[str], plot: bool, extra: list[str] | None = None) -> list[dict]:
     rig = smartroom()
     rig_path = out / "rig.yaml"
     scene, frames = build_multi(kind, rig, seed)
@@ -62,7 +63,7 @@ def run_one(out: Path, kind: str, seed: int, merges: list[str], plot: bool) -> l
     rows = []
     for merge in merges:
         trk_path = out / "logs" / f"{kind}_{seed}_{merge}_tracks.lcm"
-        run_daemon(rig_path, log, trk_path, "pkf", Q, ["--merge", merge])
+        run_daemon(rig_path, log, trk_path, "pkf", Q, ["--merge", merge] + (extra or []))
         tr = read_log(str(trk_path), lambda c: c in ("TRACKS", "MVTRACK_STATUS"))
         r = as_dict(clear_mot(pair_frames(sc, tr, rig.frame_rate)))
         st = tr.status[-1] if tr.status else None
@@ -86,13 +87,15 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", type=Path, default=Path("out/mot"), help="output folder (default out/mot)")
     ap.add_argument("--seeds", type=int, default=3, help="seeds per scene (default 3)")
     ap.add_argument("--scenes", nargs="+", default=["crowd", "interaction"], choices=["crowd", "interaction"])
-    ap.add_argument("--merge", nargs="+", default=["neither"], choices=["neither", "share", "off"],
+    ap.add_argument("--merge", nargs="+", default=["neither"], choices=["neither", "share", "off", "top"],
                     help="daemon merged-blob policies to compare (default: neither, the daemon's default)")
+    ap.add_argument("--daemon-args", default="", metavar="ARGS",
+                    help="more mvtrackd options for every run, e.g. \"--occlusion off --exclusion 0\"")
     ap.add_argument("--jobs", type=int, default=2, help="runs in parallel (default 2)")
     ap.add_argument("--no-plots", action="store_true")
     a = ap.parse_args(argv)
     out = a.out
-    rows = run_scenes(ap, a, run_one, a.merge, not a.no_plots)
+    rows = run_scenes(ap, a, run_one, a.merge, not a.no_plots, shlex.split(a.daemon_args))
     rows.sort(key=lambda r: (r["scene"], r["merge"], r["seed"]))
     (out / "summary.json").write_text(json.dumps(rows, indent=1, default=float))
     print(f"{'scene':12s} {'merge':8s} {'seed':>4s} {'MOTA':>6s} {'MOTP mm':>8s} {'IDsw':>5s} {'IDF1':>6s} "

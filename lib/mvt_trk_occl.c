@@ -1,0 +1,184 @@
+/*
+ * mvt_trk_occl.c - occlusion hypotheses of the tracker loop (after association, per camera).
+ *
+ * A detector that reports the top of each foreground region says nothing about a person whose
+ * silhouette merged with a taller or nearer one: that person is not missed, they are hidden in
+ * the other's blob. Without this step such a track coasts on its last velocity with a growing
+ * covariance and is deleted after coast_max_s, although every camera that cannot see it shows
+ * exactly where it may be: inside the blob's box.
+ *
+ * For each confirmed track that camera k did not update, every blob of camera k that another
+ * track took (or that was withheld as a merged pair's) and whose box holds the track's predicted
+ * head is a hypothesis "hidden in this blob". The head then lies in the box's column band, at
+ * least body_halfwidth_m (seen at the track's depth) inside the side edges, widened by the
+ * detection's pixel sigma. The likeliest blob under a uniform position in the band (the prior
+ * mass of the band over its width) constrains the track: its predicted column is truncated to
+ * the band (mvt_pkf_truncate_u). A truncation moves a prior that sits inside a wide band only a
+ * little, and a hidden person's prior usually does: the update does not drag the track onto the
+ * blob's centre (which a Gaussian pseudo-measurement at the centre would do, merging the hidden
+ * person into the visible one), it only keeps the track from drifting out of the band, which
+ * bounds its covariance while it is hidden.
+ *
+ * The view then counts toward keeping the track alive (mvt_trk_delete: seen views plus occluded
+ * views >= seen_min_views), for at most occluded_max_s. It never counts as a hit toward
+ * confirmation, and a blob without a box (all zero) explains nothing.
+ */
+#include <math.h>
+#include <stddef.h>
+
+#include "mvt_trk.h"
+
+#ifndef OCCL_MIN_MASS
+#define OCCL_MIN_MASS MVT_R(0.1)
+#endif
+
+/* Is the box usable: finite, non-empty. */
+static int box_ok(const mvt_real b[4])
+{
+    return isfinite(b[0]) && isfinite(b[1]) && isfinite(b[2]) && isfinite(b[3]) && b[2] > b[0] && b[3] > b[1];
+}
+
+void mvt_trk_occlusion(mvt_tracker_t *self, const mvt_view_t *view, int k, const int assign[MVT_MAX_TARGETS])
+{
+    const mvt_tracker_config_t *c = &self->cfg;
+    const mvt_camera_t *cam = &self->cams[k];
+    const int nd = self->num_meas[k];
+    int any = 0;
+    for (int d = 0; d < nd && !any; d++) {
+        any = self->used[k][d] && box_ok(view->det[d].box);
+    }
+    if (!any) {
+        return;
+    }
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        mvt_track_t *tr = &self->tracks[t];
+        if (tr->id == 0 || tr->status == MVT_TRACK_TENTATIVE || assign[t] >= 0 || !self->pred_ok[t]) {
+            continue;
+        }
+        /* the boxes are in raw pixels: the Jacobian prediction (the tracker's own when it uses it) */
+        mvt_pkf_pred_t raw;
+        const mvt_pkf_pred_t *p = &self->pred[t];
+        if (p->lin != MVT_PKF_JACOBIAN) {
+            if (mvt_pkf_predict_obs(&tr->s, cam, MVT_PKF_JACOBIAN, &raw) != MVT_OK) {
+                continue;
+            }
+            p = &raw;
+        }
+        const mvt_real su = MVT_SQRT(p->hph[0]), sv = MVT_SQRT(p->hph[2]);
+        const mvt_real half_px = cam->fx * c->body_halfwidth_m / p->depth_m;
+        int best = -1;
+        mvt_real best_lik = MVT_R(0.0), best_lo = MVT_R(0.0), best_hi = MVT_R(0.0);
+        for (int d = 0; d < nd; d++) {
+            const mvt_real *b = view->det[d].box;
+            if (!self->used[k][d] || !box_ok(b)) {
+                continue;
+            }
+            const mvt_real sig = MVT_SQRT(self->meas[k][d].var_px2);
+            /* the head lies between the box's top and bottom (3 sigma of slack) ... */
+            const mvt_real slack_v = MVT_R(3.0) * MVT_SQRT(sv * sv + sig * sig);
+            if (!(p->h[1] >= b[1] - slack_v) || !(p->h[1] <= b[3] + slack_v)) {
+                continue;
+            }
+            /* ... and in the column band half a body inside the side edges */
+            mvt_real lo = b[0] + half_px - sig, hi = b[2] - half_px + sig;
+            if (!(hi - lo >= MVT_R(2.0) * sig)) { /* a blob narrower than a body: its middle */
+                const mvt_real mid = MVT_R(0.5) * (b[0] + b[2]);
+                lo = mid - sig;
+                hi = mid + sig;
+            }
+            /* the band must agree with the track: a prior mostly outside it says the track is not
+             * hidden there */
+            const mvt_real r2 = MVT_R(0.70710678118654752);
+            const mvt_real mass = MVT_R(0.5) * (MVT_ERFC((lo - p->h[0]) / su * r2) - MVT_ERFC((hi - p->h[0]) / su * r2));
+            if (!(mass >= OCCL_MIN_MASS)) {
+                continue;
+            }
+            const mvt_real lik = mass / (hi - lo);
+            if (best < 0 || lik > best_lik) {
+                best = d;
+                best_lik = lik;
+                best_lo = lo;
+                best_hi = hi;
+            }
+        }
+        if (best < 0) {
+            continue;
+        }
+        /* the band holds the body's axis, not the head point: the constraint acts on the ground
+         * position (the column's dependence on the unseen head height is dropped), so a hidden
+         * track's height stays what the views last measured */
+        const mvt_real Hg[3] = {p->H[0], p->H[1], MVT_R(0.0)};
+        const mvt_err_t err = mvt_cv_truncate(&tr->s, Hg, p->h[0], best_lo, best_hi, NULL);
+        if (err == MVT_OK) {
+            tr->cameras_occluded |= 1u << k;
+            self->counters.occluded_updates++;
+        } else if (err != MVT_ERR_NUMERIC) {
+            self->counters.numeric_faults++;
+        }
+    }
+}
+
+static int popcount32(uint32_t x)
+{
+    int n = 0;
+    while (x != 0u) {
+        x &= x - 1u;
+        n++;
+    }
+    return n;
+}
+
+/* n^T P n over the position block, n horizontal */
+static mvt_real horiz_var(const mvt_cv_state_t *s, const mvt_real n[3])
+{
+    const mvt_real *P = s->P;
+    return n[0] * n[0] * P[0] + MVT_R(2.0) * n[0] * n[1] * P[1] + n[1] * n[1] * P[7];
+}
+
+void mvt_trk_exclusion(mvt_tracker_t *self)
+{
+    const mvt_tracker_config_t *c = &self->cfg;
+    const int min_views = c->seen_min_views < self->num_cameras ? c->seen_min_views : self->num_cameras;
+    for (int a = 0; a < MVT_MAX_TARGETS; a++) {
+        mvt_track_t *ta = &self->tracks[a];
+        if (ta->id == 0 || ta->status == MVT_TRACK_TENTATIVE) {
+            continue;
+        }
+        for (int b = a + 1; b < MVT_MAX_TARGETS; b++) {
+            mvt_track_t *tb = &self->tracks[b];
+            if (tb->id == 0 || tb->status == MVT_TRACK_TENTATIVE) {
+                continue;
+            }
+            const int poor_a = popcount32(ta->cameras_used) < min_views;
+            const int poor_b = popcount32(tb->cameras_used) < min_views;
+            if (!poor_a && !poor_b) {
+                continue; /* both well seen: their measurements decide */
+            }
+            const mvt_real dx = ta->s.x[0] - tb->s.x[0], dy = ta->s.x[1] - tb->s.x[1];
+            const mvt_real d = MVT_SQRT(dx * dx + dy * dy);
+            if (!(d < c->exclusion_m) || !(d > MVT_R(1e-6))) {
+                continue; /* far enough, or on top of each other: no direction to push along */
+            }
+            /* n . (x_a - x_b) >= exclusion_m, n the unit horizontal separation; each poorly seen
+             * track takes its share of the joint truncation (the other's variance as extra) */
+            const mvt_real n[3] = {dx / d, dy / d, MVT_R(0.0)};
+            const mvt_real m[3] = {-n[0], -n[1], MVT_R(0.0)};
+            const mvt_real na = n[0] * ta->s.x[0] + n[1] * ta->s.x[1];
+            const mvt_real nb = n[0] * tb->s.x[0] + n[1] * tb->s.x[1];
+            const mvt_real va = horiz_var(&ta->s, n), vb = horiz_var(&tb->s, n);
+            mvt_err_t err = MVT_OK;
+            if (poor_a) {
+                err = mvt_cv_truncate_ex(&ta->s, n, na, vb, nb + c->exclusion_m, nb + c->exclusion_m + MVT_R(1e3), NULL);
+                self->counters.exclusion_updates += err == MVT_OK;
+            }
+            if (poor_b && err != MVT_ERR_INVALID) {
+                err = mvt_cv_truncate_ex(&tb->s, m, -nb, va, -na + c->exclusion_m, -na + c->exclusion_m + MVT_R(1e3),
+                                         NULL);
+                self->counters.exclusion_updates += err == MVT_OK;
+            }
+            if (err != MVT_OK && err != MVT_ERR_NUMERIC) {
+                self->counters.numeric_faults++;
+            }
+        }
+    }
+}
