@@ -569,10 +569,11 @@ static void usage(FILE *f)
             "                      pf-ms        the same, motion masks only (colour ignored)\n"
             "  --particles N       pf: particles per person, 16..%d (default %d)\n"
             "  --exclusion M       two people's heads are at least M metres apart horizontally\n"
-            "                      (default 0.5; 0 = off). pf: particles closer to another person's\n"
-            "                      centre are penalised, so two filters cannot share one body (0: the\n"
-            "                      paper's independent filters); other modes: a track seen by fewer\n"
-            "                      than two cameras is kept this far from the others\n"
+            "                      (default 0.5 in pf modes, 0.4 otherwise; 0 = off). pf: particles\n"
+            "                      closer to another person's centre are penalised, so two filters\n"
+            "                      cannot share one body (0: the paper's independent filters); other\n"
+            "                      modes: a track seen by fewer than two cameras is kept this far\n"
+            "                      from the others\n"
             "  --occlusion box|off a confirmed track a camera did not update although it lies inside\n"
             "                      the box of a blob given to another track is hidden there: box\n"
             "                      (default) keeps it in the box's columns and alive; off: missed\n"
@@ -583,7 +584,9 @@ static void usage(FILE *f)
             "  --seed N            pf: random number seed (default 1); same seed, same output\n"
             "  --publish-particles N\n"
             "                      pf: publish N particles per person on MVTRACK_PARTICLES\n"
-            "                      (mvtrack.particles_t; default 0 = none)\n"
+            "                      (mvtrack.particles_t; default 0 = none)\n",
+            MVTD_DEFAULT_URL, MVT_MAX_PARTICLES, MVT_MAX_PARTICLES);
+    fprintf(f,
             "  --gate chi2|paper   association gate: innovation chi-square (default) or the paper's\n"
             "                      projected ellipsoid (Eq. 22-26)\n"
             "  --gate-chi2 X       chi-square threshold, 2 dof (default 13.8)\n"
@@ -601,8 +604,7 @@ static void usage(FILE *f)
             "  --help              this text\n"
             "\n"
             "Exit status: 0 after SIGINT/SIGTERM or at the end of a file:// log; 2 on bad arguments\n"
-            "or rig; 1 when LCM cannot be opened.\n",
-            MVTD_DEFAULT_URL, MVT_MAX_PARTICLES, MVT_MAX_PARTICLES);
+            "or rig; 1 when LCM cannot be opened.\n");
 }
 
 static int parse_q(const char *s, mvt_real q[3])
@@ -691,7 +693,7 @@ int mvtd_configure(daemon_state_t *d, int argc, char **argv)
     int opt;
     optind = 1; /* callable more than once (tests, fuzzer) */
     long particles = MVT_MAX_PARTICLES, seed = 1, publish_particles = 0;
-    double exclusion_m = 0.5;
+    double exclusion_m = -1.0; /* mode-dependent default */
     while ((opt = getopt_long(argc, argv, "r:i:o:m:g:c:q:s:d:M:O:vhP:X:S:Q:B:", opts, NULL)) != -1) {
         switch (opt) {
         case 'r': rig_path = optarg; break;
@@ -787,6 +789,9 @@ int mvtd_configure(daemon_state_t *d, int argc, char **argv)
     cfg.merge = merge_of[ri];
     cfg.gate_chi2 = (mvt_real)gate_chi2;
     cfg.occlusion = oi == 0;
+    if (exclusion_m < 0.0) { /* measured defaults: docs/particle-filter.md, docs/tracking.md */
+        exclusion_m = mi >= 5 ? 0.5 : 0.4;
+    }
     cfg.exclusion_m = (mvt_real)exclusion_m;
     memcpy(cfg.q_m2s3, q, sizeof(q));
     d->mode_name = mode;

@@ -53,6 +53,8 @@ void mvt_tracker_config_default(mvt_tracker_config_t *c)
     c->body_halfwidth_m = MVT_R(0.2);
     c->occluded_max_s = MVT_R(10.0);
     c->exclusion_m = MVT_R(0.4);
+    c->contra_views = 2;
+    c->contra_max_s = MVT_R(0.5);
 }
 
 static int config_ok(const mvt_tracker_config_t *c)
@@ -77,6 +79,7 @@ static int config_ok(const mvt_tracker_config_t *c)
            (c->occlusion == 0 || c->occlusion == 1) && c->body_halfwidth_m >= MVT_R(0.0) &&
            isfinite(c->body_halfwidth_m) && c->occluded_max_s > MVT_R(0.0) && isfinite(c->occluded_max_s) &&
            c->exclusion_m >= MVT_R(0.0) && isfinite(c->exclusion_m) &&
+           c->contra_views >= 1 && c->contra_max_s > MVT_R(0.0) && isfinite(c->contra_max_s) &&
            (c->merge == MVT_MERGE_NEITHER || c->merge == MVT_MERGE_SHARE || c->merge == MVT_MERGE_OFF ||
             c->merge == MVT_MERGE_TOP) &&
            (c->filter == MVT_FILTER_PROJECTIVE || c->filter == MVT_FILTER_TRIANGULATE) &&
@@ -307,6 +310,7 @@ mvt_err_t mvt_tracker_step(mvt_tracker_t *self, const mvt_frame_t *frame, mvt_ou
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         self->tracks[t].cameras_used = 0u;
         self->tracks[t].cameras_occluded = 0u;
+        self->tracks[t].cameras_uncovered = 0u;
     }
 
     if (self->cfg.filter == MVT_FILTER_PROJECTIVE) {

@@ -115,6 +115,10 @@ typedef struct mvt_tracker_config {
                                    inside the blob's side edges; >= 0, default 0.2 */
     mvt_real occluded_max_s;    /* a track kept alive by occluded views alone is deleted after this
                                    long without enough real views; > 0, default 10 */
+    int contra_views;           /* a track not seen this frame whose place is in no blob in at least
+                                   this many views (with boxes) is contradicted: it is not hidden
+                                   and it is not there; >= 1, default 2 */
+    mvt_real contra_max_s;      /* a track contradicted this long is deleted; > 0, default 0.5 */
     mvt_real exclusion_m;       /* two people's heads are at least this far apart horizontally: a
                                    track seen in fewer than seen_min_views cameras this frame is kept
                                    this far from every track seen in more (mvt_cv_truncate along
@@ -185,6 +189,7 @@ typedef struct mvt_counters {
     uint64_t deleted_uncertain;       /*   position std above max_pos_std_m */
     uint64_t deleted_outside;         /*   left the volume (plus margin) */
     uint64_t deleted_occluded;        /*   kept by occluded views alone for occluded_max_s */
+    uint64_t deleted_contradicted;    /*   unseen and in no blob in contra_views views for contra_max_s */
     uint64_t merged_updates;          /* MVT_MERGE_SHARE: updates from a detection shared by
                                          unresolved tracks */
     uint64_t merged_ambiguous;        /* MVT_MERGE_NEITHER: track-camera updates withheld because
@@ -204,10 +209,13 @@ typedef struct mvt_track {
     mvt_cv_state_t s;
     uint32_t cameras_used;      /* this frame */
     uint32_t cameras_occluded;  /* this frame: cameras that explained the track as hidden */
+    uint32_t cameras_uncovered; /* this frame: cameras that show the track's place in their image
+                                   in no blob at all (occlusion on, views with boxes only) */
     uint32_t hit_history;       /* bit 0: this frame had an update, bit 1: previous, ... */
     int32_t misses;             /* consecutive frames not seen (seen_min_views) */
     int64_t last_update_us;     /* last frame seen */
     int64_t last_explained_us;  /* last frame seen, or seen and hidden in enough views */
+    int64_t last_consistent_us; /* last frame seen, or contradicted by fewer than contra_views */
 } mvt_track_t;
 
 /* Multi-view birth candidates examined per frame (the best are kept; the excess is counted). */

@@ -80,13 +80,17 @@ void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us)
         const int hit = views >= min_views || (views >= 1 && tr->s.P[0] <= std2 && tr->s.P[7] <= std2 &&
                                                tr->s.P[14] <= std2);
         tr->hit_history = (tr->hit_history << 1) | (hit ? 1u : 0u);
+        const int contradicted = !hit && popcount32(tr->cameras_uncovered) >= c->contra_views;
+        if (!contradicted) {
+            tr->last_consistent_us = now_us;
+        }
         if (hit) {
             tr->misses = 0;
             tr->last_update_us = now_us;
             tr->last_explained_us = now_us;
         } else {
             tr->misses++;
-            if (views + popcount32(tr->cameras_occluded) >= min_views) {
+            if (!contradicted && views + popcount32(tr->cameras_occluded) >= min_views) {
                 tr->last_explained_us = now_us; /* hidden in other tracks' blobs, not lost */
             }
         }
@@ -114,6 +118,8 @@ void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us)
                 reason = &self->counters.deleted_unseen;
             } else if (unseen_s > c->occluded_max_s) {
                 reason = &self->counters.deleted_occluded;
+            } else if (mvt_us_to_s(now_us - tr->last_consistent_us) > c->contra_max_s) {
+                reason = &self->counters.deleted_contradicted;
             } else if (lost_s > c->exit_coast_s && near_side_wall(c, tr->s.x)) {
                 reason = &self->counters.deleted_exit;
             }

@@ -249,6 +249,7 @@ static void birth(mvt_tracker_t *self, const mvt_frame_t *frame, const mvt_birth
     tr->hit_history = 1u;
     tr->last_update_us = frame->utime_us;
     tr->last_explained_us = frame->utime_us;
+    tr->last_consistent_us = frame->utime_us;
     self->counters.births++;
 }
 

@@ -45,10 +45,10 @@ void mvt_trk_occlusion(mvt_tracker_t *self, const mvt_view_t *view, int k, const
     const int nd = self->num_meas[k];
     int any = 0;
     for (int d = 0; d < nd && !any; d++) {
-        any = self->used[k][d] && box_ok(view->det[d].box);
+        any = box_ok(view->det[d].box);
     }
     if (!any) {
-        return;
+        return; /* a view without boxes can neither hide nor contradict */
     }
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         mvt_track_t *tr = &self->tracks[t];
@@ -102,6 +102,13 @@ void mvt_trk_occlusion(mvt_tracker_t *self, const mvt_view_t *view, int k, const
             }
         }
         if (best < 0) {
+            /* in the image, not seen and in no blob: this view contradicts the track (unless the
+             * detector missed the whole blob) */
+            const mvt_real m = MVT_R(2.0) * sv + MVT_R(2.0) * su + MVT_R(8.0);
+            if (p->h[0] >= m && p->h[0] <= (mvt_real)cam->width - m && p->h[1] >= m &&
+                p->h[1] <= (mvt_real)cam->height - m) {
+                tr->cameras_uncovered |= 1u << k;
+            }
             continue;
         }
         /* the band holds the body's axis, not the head point: the constraint acts on the ground

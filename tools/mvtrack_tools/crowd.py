@@ -85,6 +85,7 @@ class Walker:
         self.sway = np.zeros(2)
         self.done = False
         self.stuck_s = 0.0
+        self.exits = False  # the plan's last waypoint is a door the walker leaves through
 
     def step(self, dt: float, others: list["Walker"]) -> tuple[np.ndarray, np.ndarray]:
         want = np.zeros(2)
@@ -96,7 +97,10 @@ class Walker:
                 self.pause -= dt
                 if self.pause <= 0.0:
                     self.i += 1
-            elif dist < 0.15 or self.stuck_s > 2.0:  # arrived, or blocked by others: give up
+            elif dist < (0.3 if self.exits and self.i == len(self.plan) - 1 else 0.15) or \
+                    (self.stuck_s > 2.0 and not (self.exits and self.i == len(self.plan) - 1)):
+                # arrived, or blocked by others: give up that waypoint (never the exit door: people
+                # leave through doors, they do not vanish where they stand)
                 self.pause = max(hold, dt)
                 self.stuck_s = 0.0
             else:
@@ -136,6 +140,8 @@ def simulate_walkers(walkers: list[Walker], starts: list[int], n: int, dt: float
     leaves disappears. Returns one Person per walker."""
     pos: list[list] = [[] for _ in walkers]
     vel: list[list] = [[] for _ in walkers]
+    for w, leave in zip(walkers, leave_when_done):
+        w.exits = leave
     active = [False] * len(walkers)
     gone = [False] * len(walkers)
     for f in range(n):
