@@ -385,6 +385,11 @@ int main(int argc, char **argv)
                     d->v = uv[1] + (mvt_real)(2 * (rnd() + rnd() + rnd() - 1.5) * 1.414);
                     d->sigma_px = 2;
                     d->score = 1;
+                    /* a body-sized box under the head, so the occlusion step has blobs to test */
+                    d->box[0] = d->u - 25;
+                    d->box[1] = d->v;
+                    d->box[2] = d->u + 25;
+                    d->box[3] = d->v + 160;
                 }
                 if (rnd() < 0.3) {
                     mvt_detection_t *d = &v->det[v->num_detections++];
@@ -392,6 +397,10 @@ int main(int argc, char **argv)
                     d->v = (mvt_real)(rnd() * 575);
                     d->sigma_px = 2;
                     d->score = 1;
+                    d->box[0] = d->u - 15;
+                    d->box[1] = d->v;
+                    d->box[2] = d->u + 15;
+                    d->box[3] = d->v + 90;
                 }
             }
             const auto t0 = std::chrono::steady_clock::now();

@@ -4,6 +4,8 @@
 #include <stddef.h>
 #include <stdint.h>
 #include <cmocka.h>
+#include <math.h>
+#include <string.h>
 
 #include "mvt_tracker.h"
 #include "test_support.h"
@@ -82,6 +84,101 @@ static void test_mvt_cv_update_point_outlier_gated_state_unchanged(void **state)
     assert_int_equal(mvt_cv_update_point(&s, z2, R, 16.0f, NULL), MVT_OK);
     assert_float_equal(s.x[0], 1.1, 1e-5);
     assert_float_equal(s.P[0], 5e-3, 1e-6);
+}
+
+/* Mean and variance of N(mu, s2 + e) restricted to [lo, hi], by Simpson quadrature in double (an
+ * independent reference for the closed form in mvt_cv_truncate). */
+static void truncated_moments_quadrature(double mu, double var, double lo, double hi, double *mean, double *v)
+{
+    const double sd = sqrt(var);
+    const double a = lo > mu - 14 * sd ? lo : mu - 14 * sd, b = hi < mu + 14 * sd ? hi : mu + 14 * sd;
+    const int n = 200000; /* even */
+    const double h = (b - a) / n;
+    double z = 0, m1 = 0, m2 = 0;
+    for (int i = 0; i <= n; i++) {
+        const double x = a + i * h;
+        const double w = (i == 0 || i == n) ? 1 : (i % 2 ? 4 : 2);
+        const double p = w * exp(-0.5 * (x - mu) * (x - mu) / var);
+        z += p;
+        m1 += p * x;
+        m2 += p * x * x;
+    }
+    *mean = m1 / z;
+    *v = m2 / z - *mean * *mean;
+}
+
+static void random_state(test_rng_t *rng, mvt_cv_state_t *st)
+{
+    double A[36], P[36];
+    for (int i = 0; i < 36; i++) A[i] = test_normal(rng) * (i % 6 < 3 ? 0.2 : 0.5);
+    for (int i = 0; i < 6; i++) {
+        for (int j = 0; j < 6; j++) {
+            double acc = i == j ? 1e-3 : 0;
+            for (int k = 0; k < 6; k++) acc += A[i * 6 + k] * A[j * 6 + k];
+            P[i * 6 + j] = acc;
+        }
+    }
+    memset(st, 0, sizeof(*st));
+    for (int i = 0; i < 6; i++) st->x[i] = (mvt_real)test_normal(rng);
+    for (int i = 0; i < 36; i++) st->P[i] = (mvt_real)P[i];
+}
+
+static void test_mvt_cv_truncate_matches_quadrature(void **state)
+{
+    (void)state;
+    test_rng_t rng = {2024};
+    /* bands in prior standard deviations: inside, one tail, far tail one-sided, narrow, wide open */
+    const double bands[][2] = {{-0.5, 1.0}, {0.8, 2.0}, {2.5, 1e3}, {-1e3, -2.0}, {0.3, 0.32}, {-0.01, 0.01}, {-9, 9}};
+    const double extras[] = {0.0, 0.5};
+    for (int trial = 0; trial < 20; trial++) {
+        for (size_t b = 0; b < sizeof(bands) / sizeof(bands[0]); b++) {
+            for (int e = 0; e < 2; e++) {
+                mvt_cv_state_t st, before;
+                random_state(&rng, &st);
+                before = st;
+                const mvt_real H[3] = {(mvt_real)test_normal(&rng), (mvt_real)test_normal(&rng), (mvt_real)test_normal(&rng)};
+                double hp[6], s2 = 0, mu = 0;
+                for (int j = 0; j < 6; j++) {
+                    hp[j] = 0;
+                    for (int i = 0; i < 3; i++) hp[j] += (double)H[i] * (double)st.P[i * 6 + j];
+                }
+                for (int i = 0; i < 3; i++) {
+                    s2 += hp[i] * (double)H[i];
+                    mu += (double)H[i] * (double)st.x[i];
+                }
+                const double extra = extras[e] * s2, tot = s2 + extra, sd = sqrt(tot);
+                const double lo = mu + bands[b][0] * sd, hi = mu + bands[b][1] * sd;
+                double m, v;
+                truncated_moments_quadrature(mu, tot, lo, hi, &m, &v);
+                mvt_real mass = -1;
+                assert_int_equal(mvt_cv_truncate_ex(&st, H, (mvt_real)mu, (mvt_real)extra, (mvt_real)lo, (mvt_real)hi, &mass),
+                                 MVT_OK);
+                assert_true(mass > 0 && mass <= 1.0001f);
+                /* exact for a linear functional: x' = x + P H^T (m - mu) / tot,
+                 * P' = P - P H^T H P (tot - v) / tot^2 */
+                for (int i = 0; i < 6; i++) {
+                    const double want = (double)before.x[i] + hp[i] * (m - mu) / tot;
+                    assert_true(fabs((double)st.x[i] - want) < 2e-3 * (1 + sqrt((double)before.P[i * 7])));
+                    for (int j = 0; j < 6; j++) {
+                        const double wp = (double)before.P[i * 6 + j] - hp[i] * hp[j] * (tot - v) / (tot * tot);
+                        assert_true(fabs((double)st.P[i * 6 + j] - wp) < 2e-3 * (1 + fabs((double)before.P[i * 6 + j])));
+                    }
+                }
+            }
+        }
+    }
+    /* hostile: an empty or non-finite band, a band without prior mass: refused, state untouched */
+    mvt_cv_state_t st, before;
+    random_state(&rng, &st);
+    before = st;
+    const mvt_real H[3] = {1, 0, 0};
+    assert_int_equal(mvt_cv_truncate(&st, H, st.x[0], 1, 1, NULL), MVT_ERR_INVALID);
+    assert_int_equal(mvt_cv_truncate(&st, H, st.x[0], 2, 1, NULL), MVT_ERR_INVALID);
+    assert_int_equal(mvt_cv_truncate(&st, H, st.x[0], NAN, 1, NULL), MVT_ERR_INVALID);
+    assert_int_equal(mvt_cv_truncate_ex(&st, H, st.x[0], -1, 0, 1, NULL), MVT_ERR_INVALID);
+    const mvt_real far = st.x[0] + 8 * sqrtf((float)st.P[0]);
+    assert_int_equal(mvt_cv_truncate(&st, H, st.x[0], far, far + 1, NULL), MVT_ERR_NUMERIC);
+    assert_memory_equal(&st, &before, sizeof(st));
 }
 
 static void test_mvt_pkf_innovation_behind_camera_refused(void **state)
@@ -236,6 +333,28 @@ static void test_mvt_tracker_init_bad_config_rejected(void **state)
     mvt_tracker_config_default(&cfg);
     cfg.volume_max[2] = cfg.volume_min[2];
     assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 5), MVT_ERR_INVALID);
+    /* occlusion, exclusion and contradiction settings */
+    mvt_tracker_config_default(&cfg);
+    cfg.occlusion = 2;
+    assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 5), MVT_ERR_INVALID);
+    mvt_tracker_config_default(&cfg);
+    cfg.body_halfwidth_m = NAN;
+    assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 5), MVT_ERR_INVALID);
+    mvt_tracker_config_default(&cfg);
+    cfg.exclusion_m = -0.1f;
+    assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 5), MVT_ERR_INVALID);
+    mvt_tracker_config_default(&cfg);
+    cfg.contra_views = 0;
+    assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 5), MVT_ERR_INVALID);
+    mvt_tracker_config_default(&cfg);
+    cfg.occluded_max_s = INFINITY;
+    assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 5), MVT_ERR_INVALID);
+    mvt_tracker_config_default(&cfg);
+    cfg.merge = (mvt_merge_t)7;
+    assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 5), MVT_ERR_INVALID);
+    mvt_tracker_config_default(&cfg);
+    cfg.merge = MVT_MERGE_TOP;
+    assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 5), MVT_OK);
 }
 
 int main(void)
@@ -243,6 +362,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_mvt_cv_predict_constant_velocity_moves_and_grows),
         cmocka_unit_test(test_mvt_cv_update_point_outlier_gated_state_unchanged),
+        cmocka_unit_test(test_mvt_cv_truncate_matches_quadrature),
         cmocka_unit_test(test_mvt_pkf_innovation_behind_camera_refused),
         cmocka_unit_test(test_mvt_tracker_step_straight_walk_pkf_tracked),
         cmocka_unit_test(test_mvt_tracker_step_straight_walk_kf_tracked),

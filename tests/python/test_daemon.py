@@ -157,6 +157,10 @@ def test_daemon_hostile_input_counted_and_survived(tmp_path, daemon_path):
     w.write(u, "DETECTIONS_cam2", wrong)                                             # size mismatch
     flood = camera_frame(u + 40000 * 6, 56, rig.cameras[3], [(float(i % 700), float(i % 500)) for i in range(3000)], 2.0)
     w.write(u, "DETECTIONS_cam3", flood)                                             # over capacity
+    boxes = camera_frame(u + 40000 * 7, 57, rig.cameras[0],
+                         [(300.0, 200.0, (float("nan"), 0.0, 10.0, 10.0)), (310.0, 210.0, (50.0, 50.0, 10.0, 10.0)),
+                          (320.0, 220.0, (-1e30, 0.0, 1e30, 1e30)), (330.0, 230.0, (float("inf"),) * 4)], 2.0)
+    w.write(u, "DETECTIONS_cam0", boxes)                                             # hostile boxes: ignored
     old = camera_frame(T0_UTIME, 0, rig.cameras[4], [(300.0, 300.0)], 2.0)
     w.write(u, "DETECTIONS_cam4", old)                                               # time going backwards
     w.close()

@@ -27,10 +27,19 @@ from .experiment1 import run_daemon
 from .lcmio import LogWriter, read_log
 from .mot import as_dict, clear_mot, pair_frames
 from .paths import DAEMON
-from .rig import smartroom
+from .rig import random_rig, smartroom
 from .simulate import build_multi, write_multi
 
 Q = np.array([0.5, 0.5, 0.05])  # the daemon's default white-acceleration density
+
+
+def rig_of(a: argparse.Namespace):
+    """The run's rig: the smart room, or with --rig-seed N a random room and rig (random_rig:
+    room size, camera placement, intrinsics, distortion, image sizes) with --cameras cameras."""
+    seed = getattr(a, "rig_seed", 0)
+    if not seed:
+        return smartroom()
+    return random_rig(np.random.default_rng(seed), getattr(a, "cameras", 5))
 
 
 def run_scenes(ap: argparse.ArgumentParser, a: argparse.Namespace, run_one, *args) -> list[dict]:
@@ -41,7 +50,7 @@ def run_scenes(ap: argparse.ArgumentParser, a: argparse.Namespace, run_one, *arg
     if a.seeds < 1:
         ap.error("--seeds must be >= 1")
     (a.out / "logs").mkdir(parents=True, exist_ok=True)
-    smartroom().write(a.out / "rig.yaml")
+    rig_of(a).write(a.out / "rig.yaml")
     jobs = [(k, s) for k in a.scenes for s in range(1, a.seeds + 1)]
     rows: list[dict] = []
     with ThreadPoolExecutor(max_workers=max(1, a.jobs)) as ex:
@@ -51,8 +60,9 @@ def run_scenes(ap: argparse.ArgumentParser, a: argparse.Namespace, run_one, *arg
     return rows
 
 
-def run_one(out: Path, kind: str, seed: int, merges: list[str], plot: bool, extra: list[str] | None = None) -> list[dict]:
-    rig = smartroom()
+def run_one(out: Path, kind: str, seed: int, merges: list[str], plot: bool, extra: list[str] | None = None,
+            rig=None) -> list[dict]:
+    rig = rig or smartroom()
     rig_path = out / "rig.yaml"
     scene, frames = build_multi(kind, rig, seed)
     log = out / "logs" / f"{kind}_{seed}.lcm"
@@ -91,11 +101,16 @@ def main(argv: list[str] | None = None) -> int:
                     help="daemon merged-blob policies to compare (default: neither, the daemon's default)")
     ap.add_argument("--daemon-args", default="", metavar="ARGS",
                     help="more mvtrackd options for every run, e.g. \"--occlusion off --exclusion 0\"")
+    ap.add_argument("--rig-seed", type=int, default=0, metavar="N",
+                    help="0 (default): the smart room; N: a random room and rig from seed N")
+    ap.add_argument("--cameras", type=int, default=5, help="cameras of a --rig-seed rig (default 5)")
     ap.add_argument("--jobs", type=int, default=2, help="runs in parallel (default 2)")
     ap.add_argument("--no-plots", action="store_true")
     a = ap.parse_args(argv)
     out = a.out
-    rows = run_scenes(ap, a, run_one, a.merge, not a.no_plots, shlex.split(a.daemon_args))
+    if a.cameras < 2 or a.cameras > 8:
+        ap.error("--cameras must be 2..8")
+    rows = run_scenes(ap, a, run_one, a.merge, not a.no_plots, shlex.split(a.daemon_args), rig_of(a))
     rows.sort(key=lambda r: (r["scene"], r["merge"], r["seed"]))
     (out / "summary.json").write_text(json.dumps(rows, indent=1, default=float))
     print(f"{'scene':12s} {'merge':8s} {'seed':>4s} {'MOTA':>6s} {'MOTP mm':>8s} {'IDsw':>5s} {'IDF1':>6s} "
