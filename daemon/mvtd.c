@@ -823,6 +823,10 @@ int mvtd_configure(daemon_state_t *d, int argc, char **argv)
         mvt_pft_config_t pcfg;
         mvt_pft_config_default(&pcfg);
         pcfg.det = cfg;
+        /* the particle filter's blob tracker only proposes births: it keeps the lifecycle its
+         * figures were measured with (docs/particle-filter.md); exclusion is the particles' own */
+        pcfg.det.occlusion = 0;
+        pcfg.det.exclusion_m = 0;
         pcfg.num_particles = (int)particles;
         pcfg.use_colour = mi == 5;
         pcfg.column = bi == 0;

@@ -36,7 +36,7 @@ from .render import Renderer, write_rendered
 from .rig import smartroom
 
 Q = np.array([0.5, 0.5, 0.05])
-RUNS = [("pkf", "pkf", []), ("MS (paper)", "pf-ms", ["--particle-model", "point", "--exclusion", "0"]),
+RUNS = [("pkf", "pkf", []), ("pkf (occlusion off)", "pkf", ["--occlusion", "off", "--exclusion", "0"]), ("MS (paper)", "pf-ms", ["--particle-model", "point", "--exclusion", "0"]),
         ("MS+C (paper)", "pf", ["--particle-model", "point", "--exclusion", "0"]),
         ("MS+C point", "pf", ["--particle-model", "point"]), ("MS", "pf-ms", []), ("MS+C", "pf", [])]
 
