@@ -172,6 +172,11 @@ void mvtd_publish_status(daemon_state_t *d)
     st.updates_merged_shared = (int64_t)c->merged_updates;
     st.birth_candidates_dropped = (int64_t)c->birth_candidates_dropped;
     st.numeric_faults = (int64_t)c->numeric_faults;
+    st.updates_occluded = (int64_t)c->occluded_updates;
+    st.updates_exclusion = (int64_t)c->exclusion_updates;
+    st.updates_merged_top = (int64_t)c->merged_top;
+    st.deleted_occluded = (int64_t)c->deleted_occluded;
+    st.deleted_contradicted = (int64_t)c->deleted_contradicted;
     st.masks_decoded = d->masks_decoded;
     st.masks_rejected = d->masks_rejected;
     if (d->pf) {
