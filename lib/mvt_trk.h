@@ -8,6 +8,17 @@
 
 #include "mvt_tracker.h"
 
+/* Number of set bits (cameras in a mask). */
+static inline int mvt_trk_popcount(uint32_t x)
+{
+    int n = 0;
+    while (x != 0u) {
+        x &= x - 1u;
+        n++;
+    }
+    return n;
+}
+
 /* Hypothesise + associate for camera k (tracks already predicted to the camera's capture time):
  * fills assign[t] with the detection that updates track t (or -1) and merged[t] with 1 when that
  * detection is shared with unresolved tracks (its covariance is widened by merge_cov[t]). Marks

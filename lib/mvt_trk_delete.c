@@ -16,16 +16,6 @@
 
 #include "mvt_trk.h"
 
-static int popcount32(uint32_t x)
-{
-    int n = 0;
-    while (x != 0u) {
-        x &= x - 1u;
-        n++;
-    }
-    return n;
-}
-
 static int near_side_wall(const mvt_tracker_config_t *c, const mvt_real x[3])
 {
     for (int i = 0; i < 2; i++) {
@@ -75,12 +65,12 @@ void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us)
         if (tr->id == 0) {
             continue;
         }
-        const int views = popcount32(tr->cameras_used);
+        const int views = mvt_trk_popcount(tr->cameras_used);
         const mvt_real std2 = c->seen_max_std_m * c->seen_max_std_m;
         const int hit = views >= min_views || (views >= 1 && tr->s.P[0] <= std2 && tr->s.P[7] <= std2 &&
                                                tr->s.P[14] <= std2);
         tr->hit_history = (tr->hit_history << 1) | (hit ? 1u : 0u);
-        const int contradicted = !hit && popcount32(tr->cameras_uncovered) >= c->contra_views;
+        const int contradicted = !hit && mvt_trk_popcount(tr->cameras_uncovered) >= c->contra_views;
         if (!contradicted) {
             tr->last_consistent_us = now_us;
         }
@@ -90,7 +80,7 @@ void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us)
             tr->last_explained_us = now_us;
         } else {
             tr->misses++;
-            if (!contradicted && views + popcount32(tr->cameras_occluded) >= min_views) {
+            if (!contradicted && views + mvt_trk_popcount(tr->cameras_occluded) >= min_views) {
                 tr->last_explained_us = now_us; /* hidden in other tracks' blobs, not lost */
             }
         }
@@ -107,7 +97,7 @@ void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us)
         case MVT_TRACK_TENTATIVE:
             if (tr->misses >= c->tentative_max_misses) {
                 reason = &self->counters.deleted_tentative;
-            } else if (popcount32(tr->hit_history & window) >= c->confirm_hits) {
+            } else if (mvt_trk_popcount(tr->hit_history & window) >= c->confirm_hits) {
                 tr->status = MVT_TRACK_CONFIRMED;
             }
             break;

@@ -125,16 +125,6 @@ void mvt_trk_occlusion(mvt_tracker_t *self, const mvt_view_t *view, int k, const
     }
 }
 
-static int popcount32(uint32_t x)
-{
-    int n = 0;
-    while (x != 0u) {
-        x &= x - 1u;
-        n++;
-    }
-    return n;
-}
-
 /* n^T P n over the position block, n horizontal */
 static mvt_real horiz_var(const mvt_cv_state_t *s, const mvt_real n[3])
 {
@@ -156,8 +146,8 @@ void mvt_trk_exclusion(mvt_tracker_t *self)
             if (tb->id == 0 || tb->status == MVT_TRACK_TENTATIVE) {
                 continue;
             }
-            const int poor_a = popcount32(ta->cameras_used) < min_views;
-            const int poor_b = popcount32(tb->cameras_used) < min_views;
+            const int poor_a = mvt_trk_popcount(ta->cameras_used) < min_views;
+            const int poor_b = mvt_trk_popcount(tb->cameras_used) < min_views;
             if (!poor_a && !poor_b) {
                 continue; /* both well seen: their measurements decide */
             }
