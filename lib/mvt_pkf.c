@@ -134,11 +134,6 @@ mvt_err_t mvt_pkf_update(mvt_cv_state_t *s, const mvt_pkf_innov_t *in)
     return MVT_OK;
 }
 
-mvt_err_t mvt_pkf_truncate_u(mvt_cv_state_t *s, const mvt_pkf_pred_t *pred, mvt_real lo, mvt_real hi, mvt_real *mass)
-{
-    return mvt_cv_truncate(s, pred->H, pred->h[0], lo, hi, mass);
-}
-
 mvt_err_t mvt_pkf_paper_distance(const mvt_cv_state_t *s, const mvt_camera_t *cam, const mvt_real var_m2[3],
                                  mvt_real gamma, const mvt_pkf_meas_t *meas, mvt_real *dist)
 {

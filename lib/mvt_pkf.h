@@ -82,11 +82,6 @@ mvt_err_t mvt_pkf_innovation(const mvt_cv_state_t *s, const mvt_camera_t *cam, m
 /* Kalman update with a computed innovation (Joseph form, ~350 flops). */
 mvt_err_t mvt_pkf_update(mvt_cv_state_t *s, const mvt_pkf_innov_t *in);
 
-/* Constrains the state to "the point's image lies in the column band lo <= u <= hi" (pixels in
- * pred's coordinates; pred must be s's current prediction): mvt_cv_truncate on the linearised
- * u = h[0] + H[0..2] (x - x0). Same returns. */
-mvt_err_t mvt_pkf_truncate_u(mvt_cv_state_t *s, const mvt_pkf_pred_t *pred, mvt_real lo, mvt_real hi, mvt_real *mass);
-
 /* The paper's association distance (Eq. 22-26): the ellipsoid of semi-axes^2 gamma * var_m2
  * around the predicted position is projected through camera cam as the outline conic of its dual
  * quadric (V proportional to (P W^-1 P^T)^-1); V is scaled so that the projected ellipse's

@@ -109,7 +109,7 @@ typedef struct mvt_tracker_config {
     int occlusion;              /* 1 (default): a confirmed track that a camera did not update
                                    although its predicted head lies in the box of a blob that camera
                                    gave to another track is taken as hidden in that blob: its image
-                                   column is constrained to the box (mvt_pkf_truncate_u) and the
+                                   column is constrained to the box (mvt_cv_truncate) and the
                                    view counts toward keeping it alive (occluded_max_s); 0: off */
     mvt_real body_halfwidth_m;  /* half a person's width: a hidden head lies at least this far
                                    inside the blob's side edges; >= 0, default 0.2 */

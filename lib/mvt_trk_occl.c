@@ -13,7 +13,7 @@
  * least body_halfwidth_m (seen at the track's depth) inside the side edges, widened by the
  * detection's pixel sigma. The likeliest blob under a uniform position in the band (the prior
  * mass of the band over its width) constrains the track: its predicted column is truncated to
- * the band (mvt_pkf_truncate_u). A truncation moves a prior that sits inside a wide band only a
+ * the band (mvt_cv_truncate, on the ground position: see below). A truncation moves a prior that sits inside a wide band only a
  * little, and a hidden person's prior usually does: the update does not drag the track onto the
  * blob's centre (which a Gaussian pseudo-measurement at the centre would do, merging the hidden
  * person into the visible one), it only keeps the track from drifting out of the band, which
@@ -28,9 +28,10 @@
 
 #include "mvt_trk.h"
 
-#ifndef OCCL_MIN_MASS
+/* A band holding less of the track's prior than this says the track is not hidden there. On 8
+ * crowd seeds (before the contradiction step and the simulator fix) mean MOTA was 0.974 with 0.1,
+ * 0.972 with 0.3, 0.970 with "the prediction within 3 sigma of the band". */
 #define OCCL_MIN_MASS MVT_R(0.1)
-#endif
 
 /* Is the box usable: finite, non-empty. */
 static int box_ok(const mvt_real b[4])
