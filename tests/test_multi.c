@@ -27,15 +27,23 @@ static void init(void)
     assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, g_cams, 5), MVT_OK);
 }
 
-/* Detections of m heads in every camera (noise sd px), plus n_fa uniform false alarms. */
-static void frame_of(const mvt_real X[][3], int m, int64_t utime, test_rng_t *rng, double sd, int n_fa)
+/* A frame set at utime in which all 5 cameras reported, with no detections yet. */
+static void empty_frame(int64_t utime)
 {
     memset(&g_frame, 0, sizeof(g_frame));
     g_frame.utime_us = utime;
     for (int k = 0; k < 5; k++) {
+        g_frame.views[k].observed = 1;
+        g_frame.views[k].utime_us = utime;
+    }
+}
+
+/* Detections of m heads in every camera (noise sd px), plus n_fa uniform false alarms. */
+static void frame_of(const mvt_real X[][3], int m, int64_t utime, test_rng_t *rng, double sd, int n_fa)
+{
+    empty_frame(utime);
+    for (int k = 0; k < 5; k++) {
         mvt_view_t *v = &g_frame.views[k];
-        v->observed = 1;
-        v->utime_us = utime;
         for (int i = 0; i < m && v->num_detections < MVT_MAX_DETECTIONS; i++) {
             mvt_real uv[2];
             if (mvt_cam_project(&g_cams[k], X[i], uv, NULL) != MVT_OK || uv[0] < 0 || uv[1] < 0 || uv[0] > 767 ||
@@ -64,12 +72,9 @@ static void frame_of(const mvt_real X[][3], int m, int64_t utime, test_rng_t *rn
  * misses, no false alarms, pixel noise sd. with_boxes 0 sends all-zero boxes. */
 static void frame_blobs(const mvt_real X[][3], int m, int64_t utime, test_rng_t *rng, double sd, int with_boxes)
 {
-    memset(&g_frame, 0, sizeof(g_frame));
-    g_frame.utime_us = utime;
+    empty_frame(utime);
     for (int k = 0; k < 5; k++) {
         mvt_view_t *v = &g_frame.views[k];
-        v->observed = 1;
-        v->utime_us = utime;
         double box[8][4], top[8][2];
         int n = 0;
         for (int i = 0; i < m && i < 8; i++) {
