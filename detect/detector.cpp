@@ -1,0 +1,510 @@
+#include "detector.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <opencv2/imgproc.hpp>
+#include <opencv2/video.hpp>
+
+namespace mvdet {
+
+namespace {
+
+constexpr int kMaxFragments = 256;   /* largest components kept per frame */
+constexpr int kMinFragmentPx = 4;    /* working pixels: smaller components are noise */
+constexpr double kHeadRadiusM = 0.10;
+
+float dot2(const float a[2], float x, float y) { return a[0] * x + a[1] * y; }
+
+/* squared distance from (x, y) to segment a-b and the segment parameter of the nearest point */
+float seg_dist2(const float a[2], const float b[2], float x, float y, float *t_out)
+{
+    const float dx = b[0] - a[0], dy = b[1] - a[1];
+    const float l2 = dx * dx + dy * dy;
+    float t = l2 > 0.f ? ((x - a[0]) * dx + (y - a[1]) * dy) / l2 : 0.f;
+    t = std::min(1.f, std::max(0.f, t));
+    const float ex = a[0] + t * dx - x, ey = a[1] + t * dy - y;
+    *t_out = t;
+    return ex * ex + ey * ey;
+}
+
+} // namespace
+
+std::string check_config(const Config &c, int width, int height)
+{
+    if (c.work_scale < 1 || c.work_scale > 8) {
+        return "work scale must be 1..8";
+    }
+    if (width % c.work_scale != 0 || height % c.work_scale != 0) {
+        return "image size " + std::to_string(width) + "x" + std::to_string(height) +
+               " is not a multiple of the work scale " + std::to_string(c.work_scale);
+    }
+    if (c.masks) {
+        if (c.mask_scale < 1 || c.mask_scale > 32) {
+            return "mask scale must be 1..32";
+        }
+        if (width % c.mask_scale != 0 || height % c.mask_scale != 0) {
+            return "image size " + std::to_string(width) + "x" + std::to_string(height) +
+                   " is not a multiple of the mask scale " + std::to_string(c.mask_scale);
+        }
+    }
+    if (c.history < 1) {
+        return "history must be >= 1";
+    }
+    if (!(c.var_threshold > 0.0)) {
+        return "variance threshold must be > 0";
+    }
+    if (!(c.min_person_fraction >= 0.0 && c.min_person_fraction <= 1.0)) {
+        return "minimum person fraction must be in [0, 1]";
+    }
+    if (!(c.person_radius_m > 0.0 && c.column_height_m > 1.0 && c.body_half_width_m > 0.0 &&
+          c.person_height_m > 0.5 && c.head_gap_m > 0.0)) {
+        return "person geometry must be positive (column above 1 m, person above 0.5 m)";
+    }
+    return "";
+}
+
+Detector::Detector(const mvt_camera_t &cam, const double volume_min[3], const double volume_max[3],
+                   const Config &cfg)
+    : cam_(cam), cfg_(cfg)
+{
+    for (int i = 0; i < 3; i++) {
+        vmin_[i] = volume_min[i];
+        vmax_[i] = volume_max[i];
+    }
+    if (cfg_.model == BgModel::mog2) {
+        bg_ = cv::createBackgroundSubtractorMOG2(cfg_.history, cfg_.var_threshold, cfg_.shadows);
+    } else {
+        bg_ = cv::createBackgroundSubtractorKNN(cfg_.history, cfg_.var_threshold, cfg_.shadows);
+    }
+    open_kernel_ = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(3, 3));
+    close_kernel_ = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(5, 5));
+    wsmall_ = cam_.width / cfg_.work_scale;
+    hsmall_ = cam_.height / cfg_.work_scale;
+}
+
+bool Detector::ground_point(float xw, float yw, double g[3]) const
+{
+    const float s = (float)cfg_.work_scale;
+    const mvt_real uv[2] = {(mvt_real)((xw + 0.5f) * s - 0.5f), (mvt_real)((yw + 0.5f) * s - 0.5f)};
+    mvt_real o[3], d[3];
+    if (mvt_cam_ray(&cam_, uv, o, d) != MVT_OK || !(d[2] < (mvt_real)-1e-4)) {
+        return false;
+    }
+    const double t = -(double)o[2] / (double)d[2];
+    if (!(t > 0.0 && t < 1e3)) {
+        return false;
+    }
+    for (int i = 0; i < 3; i++) {
+        g[i] = (double)o[i] + t * (double)d[i];
+    }
+    g[2] = 0.0;
+    return true;
+}
+
+bool Detector::project_work(const double x[3], float p[2]) const
+{
+    const mvt_real xw[3] = {(mvt_real)x[0], (mvt_real)x[1], (mvt_real)x[2]};
+    mvt_real uv[2];
+    if (mvt_cam_project(&cam_, xw, uv, nullptr) != MVT_OK) {
+        return false;
+    }
+    const float s = (float)cfg_.work_scale;
+    p[0] = ((float)uv[0] + 0.5f) / s - 0.5f;
+    p[1] = ((float)uv[1] + 0.5f) / s - 0.5f;
+    return std::isfinite(p[0]) && std::isfinite(p[1]);
+}
+
+void Detector::local_up(float xw, float yw, float up[2]) const
+{
+    up[0] = 0.f;
+    up[1] = -1.f;
+    const float s = (float)cfg_.work_scale;
+    const mvt_real uv[2] = {(mvt_real)((xw + 0.5f) * s - 0.5f), (mvt_real)((yw + 0.5f) * s - 0.5f)};
+    mvt_real o[3], d[3];
+    if (mvt_cam_ray(&cam_, uv, o, d) != MVT_OK) {
+        return;
+    }
+    /* a point of the ray at mid-body height, or 3 m along it when the ray does not go there */
+    double t = std::fabs((double)d[2]) > 1e-6 ? (1.0 - (double)o[2]) / (double)d[2] : -1.0;
+    if (!(t > 0.3 && t < 30.0)) {
+        t = 3.0;
+    }
+    double a[3], b[3];
+    for (int i = 0; i < 3; i++) {
+        a[i] = (double)o[i] + t * (double)d[i];
+        b[i] = a[i];
+    }
+    b[2] += 0.1;
+    float pa[2], pb[2];
+    if (!project_work(a, pa) || !project_work(b, pb)) {
+        return;
+    }
+    const float dx = pb[0] - pa[0], dy = pb[1] - pa[1], n = std::sqrt(dx * dx + dy * dy);
+    if (n > 1e-6f) {
+        up[0] = dx / n;
+        up[1] = dy / n;
+    }
+}
+
+Detector::Column Detector::column_at(const double g[3]) const
+{
+    Column c;
+    const double fw = 0.5 * ((double)cam_.fx + (double)cam_.fy) / cfg_.work_scale;
+    const int n_axis = 12;
+    for (int k = 0; k < n_axis; k++) {
+        const double x[3] = {g[0], g[1], cfg_.column_height_m * k / (n_axis - 1)};
+        const mvt_real xr[3] = {(mvt_real)x[0], (mvt_real)x[1], (mvt_real)x[2]};
+        const double depth = (double)mvt_cam_depth(&cam_, xr);
+        if (!(depth > 0.1) || !project_work(x, c.axis[c.n])) {
+            continue;
+        }
+        c.half[c.n] = (float)(cfg_.person_radius_m * fw / depth);
+        c.n++;
+    }
+    if (c.n < 2) {
+        return c;
+    }
+    const double foot[3] = {g[0], g[1], 0.0}, top[3] = {g[0], g[1], cfg_.person_height_m};
+    const double mid[3] = {g[0], g[1], 0.5 * cfg_.person_height_m};
+    const double head[3] = {g[0], g[1], cfg_.person_height_m - kHeadRadiusM};
+    const double head_up[3] = {g[0], g[1], cfg_.person_height_m - kHeadRadiusM + 0.1};
+    float pf[2], pt[2], ph[2], phu[2];
+    if (!project_work(foot, pf) || !project_work(top, pt) || !project_work(head, ph) ||
+        !project_work(head_up, phu)) {
+        return c;
+    }
+    const mvt_real midr[3] = {(mvt_real)mid[0], (mvt_real)mid[1], (mvt_real)mid[2]};
+    const mvt_real headr[3] = {(mvt_real)head[0], (mvt_real)head[1], (mvt_real)head[2]};
+    const double d_mid = (double)mvt_cam_depth(&cam_, midr), d_head = (double)mvt_cam_depth(&cam_, headr);
+    if (!(d_mid > 0.1 && d_head > 0.1)) {
+        return c;
+    }
+    const float dx = pt[0] - pf[0], dy = pt[1] - pf[1];
+    c.height_px = std::sqrt(dx * dx + dy * dy);
+    const float ux = phu[0] - ph[0], uy = phu[1] - ph[1], un = std::sqrt(ux * ux + uy * uy);
+    if (un > 1e-6f) {
+        c.up[0] = ux / un;
+        c.up[1] = uy / un;
+    }
+    /* the silhouette's extreme point along "up" is the head sphere's rim, not the head top: they
+     * differ by r (f / D - |d(image) / d(height)|), zero for a level view, r f / D from above */
+    c.head_offset_px = (float)(kHeadRadiusM * (fw / d_head - (double)un / 0.1));
+    c.px_per_m = (float)(fw / d_mid);
+    const float width_px = (float)(2.0 * cfg_.body_half_width_m * fw / d_mid);
+    const float cap_px = (float)(cfg_.body_half_width_m * fw / d_head);
+    c.expected_area = std::max(width_px * c.height_px, 0.5f * (float)M_PI * cap_px * cap_px);
+    c.valid = true;
+    return c;
+}
+
+bool Detector::in_column(const Column &c, float x, float y)
+{
+    for (int k = 0; k + 1 < c.n; k++) {
+        float t;
+        const float d2 = seg_dist2(c.axis[k], c.axis[k + 1], x, y, &t);
+        const float h = c.half[k] + t * (c.half[k + 1] - c.half[k]);
+        if (d2 <= h * h) {
+            return true;
+        }
+    }
+    return false;
+}
+
+void Detector::measure(const std::vector<cv::Point> &pix, const Column &col, const cv::Mat &hsv,
+                       const cv::Rect &roi, Blob &b, bool *at_border) const
+{
+    const float *up = col.up;
+    float a_max = -1e30f, a_min = 1e30f;
+    int x0 = 1 << 30, y0 = 1 << 30, x1 = -1, y1 = -1;
+    for (const cv::Point &p : pix) {
+        const float a = dot2(up, (float)p.x, (float)p.y);
+        a_max = std::max(a_max, a);
+        a_min = std::min(a_min, a);
+        x0 = std::min(x0, p.x);
+        y0 = std::min(y0, p.y);
+        x1 = std::max(x1, p.x);
+        y1 = std::max(y1, p.y);
+    }
+    /* the head top: the mean of the extreme pixels along up; a pixel is foreground when about half
+     * covered, so the edge lies a quarter pixel beyond the extreme pixels' centres on average */
+    double sx = 0, sy = 0;
+    int n_top = 0;
+    *at_border = false;
+    for (const cv::Point &p : pix) {
+        if (dot2(up, (float)p.x, (float)p.y) >= a_max - 1.0f) {
+            sx += p.x;
+            sy += p.y;
+            n_top++;
+            if (p.x == 0 || p.y == 0 || p.x == wsmall_ - 1 || p.y == hsmall_ - 1) {
+                *at_border = true;
+            }
+        }
+    }
+    const float shift = 0.25f - std::max(0.f, col.head_offset_px);
+    const float xt = (float)(sx / n_top) + shift * up[0];
+    const float yt = (float)(sy / n_top) + shift * up[1];
+    const float s = (float)cfg_.work_scale;
+    b.u = (xt + 0.5f) * s - 0.5f;
+    b.v = (yt + 0.5f) * s - 0.5f;
+    b.bbox[0] = (float)x0 * s - 0.5f;
+    b.bbox[1] = (float)y0 * s - 0.5f;
+    b.bbox[2] = (float)(x1 + 1) * s - 0.5f;
+    b.bbox[3] = (float)(y1 + 1) * s - 0.5f;
+    b.score = col.expected_area > 0.f ? std::min(1.f, (float)pix.size() / col.expected_area) : 0.5f;
+    /* torso colour: 20-45 % of the blob's length below its top */
+    const float ext = a_max - a_min;
+    double c_sum = 0, s_sum = 0, sat_sum = 0;
+    int n_col = 0;
+    for (const cv::Point &p : pix) {
+        const float a = dot2(up, (float)p.x, (float)p.y);
+        if (a > a_max - 0.2f * ext || a < a_max - 0.45f * ext) {
+            continue;
+        }
+        const cv::Vec3b &h = hsv.at<cv::Vec3b>(p.y - roi.y, p.x - roi.x);
+        const double ang = 2.0 * M_PI * h[0] / 256.0;
+        c_sum += std::cos(ang);
+        s_sum += std::sin(ang);
+        sat_sum += h[1];
+        n_col++;
+    }
+    if (n_col > 0) {
+        double hue = std::atan2(s_sum, c_sum) / (2.0 * M_PI);
+        if (hue < 0.0) {
+            hue += 1.0;
+        }
+        b.hue = (float)std::min(hue, 0.999999);
+        b.saturation = (float)(sat_sum / n_col / 255.0);
+    }
+}
+
+void Detector::process(const cv::Mat &bgr, Result &out)
+{
+    CV_Assert(bgr.type() == CV_8UC3 && bgr.cols == cam_.width && bgr.rows == cam_.height);
+    out.blobs.clear();
+    out.fragments = out.dropped_small = out.dropped_border = out.splits = 0;
+    if (cfg_.work_scale == 1) {
+        small_ = bgr;
+    } else {
+        cv::resize(bgr, small_, cv::Size(wsmall_, hsmall_), 0, 0, cv::INTER_AREA);
+    }
+    bg_->apply(small_, fg_raw_, cfg_.learning_rate);
+    cv::threshold(fg_raw_, fg_, 200, 255, cv::THRESH_BINARY); /* shadows are 127 */
+    cv::morphologyEx(fg_, tmp_, cv::MORPH_OPEN, open_kernel_);
+    cv::morphologyEx(tmp_, fg_, cv::MORPH_CLOSE, close_kernel_);
+
+    if (cfg_.masks) {
+        const cv::Size ms(cam_.width / cfg_.mask_scale, cam_.height / cfg_.mask_scale);
+        cv::resize(fg_, tmp_, ms, 0, 0, cv::INTER_AREA);
+        cv::threshold(tmp_, out.mask, 127, 1, cv::THRESH_BINARY);
+        cv::Mat small_bgr, hsv;
+        cv::resize(bgr, small_bgr, ms, 0, 0, cv::INTER_AREA);
+        cv::cvtColor(small_bgr, hsv, cv::COLOR_BGR2HSV_FULL);
+        cv::Mat ch[3];
+        cv::split(hsv, ch);
+        out.hue = ch[0];
+        out.saturation = ch[1];
+    }
+
+    const int n = cv::connectedComponentsWithStats(fg_, labels_, stats_, centroids_, 8, CV_32S);
+    /* keep the largest components */
+    std::vector<int> kept;
+    for (int i = 1; i < n; i++) {
+        if (stats_.at<int>(i, cv::CC_STAT_AREA) >= kMinFragmentPx) {
+            kept.push_back(i);
+        }
+    }
+    if ((int)kept.size() > kMaxFragments) {
+        std::nth_element(kept.begin(), kept.begin() + kMaxFragments, kept.end(), [this](int a, int b) {
+            return stats_.at<int>(a, cv::CC_STAT_AREA) > stats_.at<int>(b, cv::CC_STAT_AREA);
+        });
+        kept.resize(kMaxFragments);
+    }
+    out.fragments = (int)kept.size();
+    if (kept.empty()) {
+        return;
+    }
+    std::vector<int> slot(n, -1);
+    for (int k = 0; k < (int)kept.size(); k++) {
+        slot[kept[k]] = k;
+    }
+    std::vector<std::vector<cv::Point>> pix(kept.size());
+    for (int k = 0; k < (int)kept.size(); k++) {
+        pix[k].reserve(stats_.at<int>(kept[k], cv::CC_STAT_AREA));
+    }
+    for (int y = 0; y < labels_.rows; y++) {
+        const int *row = labels_.ptr<int>(y);
+        for (int x = 0; x < labels_.cols; x++) {
+            if (row[x] > 0 && slot[row[x]] >= 0) {
+                pix[slot[row[x]]].emplace_back(x, y);
+            }
+        }
+    }
+
+    /* each fragment's local vertical and foot point (its extreme pixels along "down") */
+    struct Frag {
+        float up[2], foot[2], low, cx, cy;
+    };
+    std::vector<Frag> fr(kept.size());
+    for (int k = 0; k < (int)kept.size(); k++) {
+        Frag &f = fr[k];
+        f.cx = (float)centroids_.at<double>(kept[k], 0);
+        f.cy = (float)centroids_.at<double>(kept[k], 1);
+        local_up(f.cx, f.cy, f.up);
+        float a_min = 1e30f;
+        for (const cv::Point &p : pix[k]) {
+            a_min = std::min(a_min, dot2(f.up, (float)p.x, (float)p.y));
+        }
+        double sx = 0, sy = 0;
+        int m = 0;
+        for (const cv::Point &p : pix[k]) {
+            if (dot2(f.up, (float)p.x, (float)p.y) <= a_min + 1.0f) {
+                sx += p.x;
+                sy += p.y;
+                m++;
+            }
+        }
+        f.foot[0] = (float)(sx / m);
+        f.foot[1] = (float)(sy / m);
+        f.low = a_min;
+    }
+    std::vector<int> order(kept.size());
+    for (int k = 0; k < (int)order.size(); k++) {
+        order[k] = k;
+    }
+    std::sort(order.begin(), order.end(), [&fr](int a, int b) { return fr[a].low < fr[b].low; });
+
+    /* fragments to people: the lowest free fragment stands on the floor; its column collects the rest */
+    std::vector<int> group(kept.size(), -1);
+    std::vector<Column> cols;
+    for (int k : order) {
+        if (group[k] >= 0) {
+            continue;
+        }
+        const int gi = (int)cols.size();
+        double g[3];
+        Column c;
+        if (ground_point(fr[k].foot[0], fr[k].foot[1], g)) {
+            c = column_at(g);
+        }
+        group[k] = gi;
+        if (c.valid) {
+            for (int j : order) {
+                if (group[j] < 0 && in_column(c, fr[j].cx, fr[j].cy)) {
+                    group[j] = gi;
+                }
+            }
+        } else {
+            c.up[0] = fr[k].up[0];
+            c.up[1] = fr[k].up[1];
+        }
+        cols.push_back(c);
+    }
+
+    /* people to blobs: split side-by-side people at the dip between two head peaks */
+    std::vector<cv::Point> all, seg;
+    for (int gi = 0; gi < (int)cols.size(); gi++) {
+        const Column &c = cols[gi];
+        all.clear();
+        for (int k = 0; k < (int)kept.size(); k++) {
+            if (group[k] == gi) {
+                all.insert(all.end(), pix[k].begin(), pix[k].end());
+            }
+        }
+        if (c.valid && (float)all.size() < (float)cfg_.min_person_fraction * c.expected_area) {
+            out.dropped_small++;
+            continue;
+        }
+        if (!c.valid && (int)all.size() < 50) { /* no floor under it: only a large blob is a person */
+            out.dropped_small++;
+            continue;
+        }
+        const float perp[2] = {-c.up[1], c.up[0]};
+        float s_lo = 1e30f, s_hi = -1e30f;
+        for (const cv::Point &p : all) {
+            const float sv = dot2(perp, (float)p.x, (float)p.y);
+            s_lo = std::min(s_lo, sv);
+            s_hi = std::max(s_hi, sv);
+        }
+        const int nb = std::min(4096, (int)std::floor(s_hi - s_lo) + 1);
+        std::vector<float> top(nb, -1e30f);
+        for (const cv::Point &p : all) {
+            const int bi = std::min(nb - 1, (int)(dot2(perp, (float)p.x, (float)p.y) - s_lo));
+            top[bi] = std::max(top[bi], dot2(c.up, (float)p.x, (float)p.y));
+        }
+        std::vector<float> cuts; /* perp coordinates where the group is cut */
+        const float ppm = c.valid ? c.px_per_m : 0.f;
+        if (c.valid && (float)nb > 0.55f * ppm) { /* wider than one body: look for two heads */
+            const int half_win = std::max(1, (int)std::lround(0.15 * (double)ppm));
+            std::vector<int> peaks;
+            for (int bi = 0; bi < nb; bi++) {
+                if (top[bi] < -1e29f) {
+                    continue;
+                }
+                bool is_max = true;
+                for (int j = std::max(0, bi - half_win); j <= std::min(nb - 1, bi + half_win) && is_max; j++) {
+                    is_max = top[j] < top[bi] || (!(top[j] > top[bi]) && j >= bi);
+                }
+                if (is_max) {
+                    peaks.push_back(bi);
+                }
+            }
+            const float gap_px = (float)cfg_.head_gap_m * (c.height_px / (float)cfg_.person_height_m);
+            for (size_t q = 0; q + 1 < peaks.size();) {
+                const int p0 = peaks[q], p1 = peaks[q + 1];
+                int cut = p0;
+                float dip = 1e30f;
+                for (int j = p0 + 1; j < p1; j++) {
+                    if (top[j] < dip) {
+                        dip = top[j];
+                        cut = j;
+                    }
+                }
+                if (std::min(top[p0], top[p1]) - dip >= gap_px && p1 - p0 >= 2 * half_win) {
+                    cuts.push_back(s_lo + (float)cut + 0.5f);
+                    q++;
+                } else { /* one head: keep the higher peak */
+                    if (top[p0] >= top[p1]) {
+                        peaks.erase(peaks.begin() + (long)q + 1);
+                    } else {
+                        peaks.erase(peaks.begin() + (long)q);
+                    }
+                }
+            }
+        }
+        for (size_t si = 0; si <= cuts.size(); si++) {
+            const float lo = si == 0 ? -1e30f : cuts[si - 1], hi = si == cuts.size() ? 1e30f : cuts[si];
+            seg.clear();
+            int x0 = 1 << 30, y0 = 1 << 30, x1 = -1, y1 = -1;
+            for (const cv::Point &p : all) {
+                const float sv = dot2(perp, (float)p.x, (float)p.y);
+                if (sv >= lo && sv < hi) {
+                    seg.push_back(p);
+                    x0 = std::min(x0, p.x);
+                    y0 = std::min(y0, p.y);
+                    x1 = std::max(x1, p.x);
+                    y1 = std::max(y1, p.y);
+                }
+            }
+            if (seg.empty() || (c.valid && (float)seg.size() < (float)cfg_.min_person_fraction * c.expected_area)) {
+                out.dropped_small++;
+                continue;
+            }
+            const cv::Rect roi(x0, y0, x1 - x0 + 1, y1 - y0 + 1);
+            cv::cvtColor(small_(roi), hsv_, cv::COLOR_BGR2HSV_FULL);
+            Blob b;
+            bool at_border = false;
+            measure(seg, c, hsv_, roi, b, &at_border);
+            if (at_border) {
+                out.dropped_border++;
+                continue;
+            }
+            out.blobs.push_back(b);
+            if (si > 0) {
+                out.splits++;
+            }
+        }
+    }
+}
+
+} // namespace mvdet

@@ -1,0 +1,123 @@
+/*
+ * detector.hpp - one camera's pixels to person blobs (the producer side of CONTRACT section 3b).
+ *
+ * Per frame: downscale by `work_scale`, per-pixel Gaussian-mixture background subtraction
+ * (OpenCV's MOG2, Zivkovic's refinement of Stauffer-Grimson, or KNN) with shadow suppression,
+ * an opening against speckle, a closing against cracks, connected components. Then the rig:
+ *
+ *  - fragments to people: a real mask splits a body (clothes the colour of the background, holes,
+ *    legs behind furniture). The lowest unassigned fragment (along the image's local "down",
+ *    the direction in which the world's vertical projects) is taken as standing on the floor:
+ *    its foot point back-projects to a ground point G, and the camera projects the column of a
+ *    person at G (radius `person_radius_m`, floor to `column_height_m`). Every fragment whose
+ *    centroid lies in that column joins the person. Repeat until every fragment has a person.
+ *  - people to blobs: a group wider than one person is split where its head profile (the highest
+ *    pixel per slice across the local vertical) has two peaks a body apart with a dip between them
+ *    (two heads side by side; the dip is the shoulders).
+ *  - a blob too small for a person at its place (area under `min_person_fraction` of the
+ *    expected silhouette) is clutter and dropped; a blob whose top touches the image border has no
+ *    visible head top and is dropped too (its mask still goes out).
+ *
+ * Each blob: the head-top point (the extreme foreground pixels along the local vertical) in raw
+ * full-resolution pixels, the box, a score (foreground area over the expected silhouette, <= 1)
+ * and the circular-mean hue and mean saturation of the torso band (20-45 % of the blob's height
+ * below its top). Optionally the cleaned mask and per-pixel hue/saturation at `mask_scale`.
+ *
+ * Memory: the background model and a handful of images at working resolution, allocated on the
+ * first frame and reused (OpenCV allocates once per size). Cost per frame: O(pixels / work_scale^2)
+ * for subtraction, morphology and labelling, plus O(blob pixels) for grouping.
+ */
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/video/background_segm.hpp>
+
+#include "mvt_camera.h"
+
+namespace mvdet {
+
+enum class BgModel { mog2, knn };
+
+struct Config {
+    BgModel model = BgModel::mog2;
+    int work_scale = 2;              /* image pixels per working pixel, 1..8 */
+    int history = 500;               /* frames the background model remembers */
+    double var_threshold = 16.0;     /* MOG2: squared Mahalanobis distance; KNN: squared distance (400) */
+    bool shadows = true;             /* detect shadows (darker, same chromaticity) and drop them */
+    double learning_rate = -1.0;     /* < 0: OpenCV's automatic rate 1/min(frames, history) */
+    double person_radius_m = 0.35;   /* half-width of the column that collects one body's fragments */
+    double column_height_m = 2.2;    /* the column's top above the floor */
+    double body_half_width_m = 0.22; /* a standing person's half-width, for the expected silhouette */
+    double person_height_m = 1.7;    /* a standing person's height, for the expected silhouette */
+    double min_person_fraction = 0.15; /* minimum foreground area / expected silhouette area */
+    double head_gap_m = 0.12;        /* dip below two head peaks that splits a group */
+    int mask_scale = 4;              /* image pixels per mask pixel (output mask) */
+    bool masks = false;              /* produce the mask and per-pixel hue/saturation */
+};
+
+struct Blob {
+    float u = 0, v = 0;              /* head top, raw full-resolution pixels */
+    float bbox[4] = {0, 0, 0, 0};    /* x_min, y_min, x_max, y_max, full-resolution pixels */
+    float score = 0;                 /* [0, 1] */
+    float hue = -1, saturation = -1; /* torso colour; < 0 unknown */
+};
+
+struct Result {
+    std::vector<Blob> blobs;
+    cv::Mat mask;                    /* CV_8U 0/1 at mask resolution (masks only) */
+    cv::Mat hue, saturation;         /* CV_8U at mask resolution, 0..255 (masks only) */
+    int fragments = 0;               /* connected components kept before grouping */
+    int dropped_small = 0;           /* groups too small for a person */
+    int dropped_border = 0;          /* groups whose head top is cut by the image border */
+    int splits = 0;                  /* extra blobs made by splitting groups */
+};
+
+/* Checks a configuration; returns "" or the reason. */
+std::string check_config(const Config &cfg, int width, int height);
+
+class Detector {
+  public:
+    /* cam: the rig camera (core model, raw pixels at full resolution). volume: the tracked volume,
+     * used to keep ground points plausible. */
+    Detector(const mvt_camera_t &cam, const double volume_min[3], const double volume_max[3], const Config &cfg);
+
+    /* One BGR frame of the camera's full size (CV_8UC3). */
+    void process(const cv::Mat &bgr, Result &out);
+
+    const Config &config() const { return cfg_; }
+
+  private:
+    struct Column {                  /* one person's column at a ground point, working pixels */
+        bool valid = false;
+        float axis[12][2];           /* projected axis points, floor to column top */
+        float half[12];              /* half-widths of the column at those points */
+        int n = 0;
+        float up[2] = {0, -1};       /* unit image direction of the world's vertical */
+        float height_px = 0;         /* image length of a standing person */
+        float px_per_m = 0;          /* image length of a horizontal metre at mid-body */
+        float head_offset_px = 0;    /* head sphere's rim beyond the head top, along up */
+        float expected_area = 0;     /* expected silhouette area */
+    };
+
+    bool ground_point(float xw, float yw, double g[3]) const;
+    bool project_work(const double x[3], float p[2]) const;
+    void local_up(float xw, float yw, float up[2]) const;
+    Column column_at(const double g[3]) const;
+    static bool in_column(const Column &c, float x, float y);
+    void measure(const std::vector<cv::Point> &pix, const Column &col, const cv::Mat &hsv, const cv::Rect &roi,
+                 Blob &b, bool *at_border) const;
+
+    mvt_camera_t cam_;
+    double vmin_[3], vmax_[3];
+    Config cfg_;
+    cv::Ptr<cv::BackgroundSubtractor> bg_;
+    cv::Mat small_, fg_raw_, fg_, tmp_, labels_, stats_, centroids_, hsv_;
+    cv::Mat open_kernel_, close_kernel_;
+    int wsmall_ = 0, hsmall_ = 0;
+};
+
+} // namespace mvdet
