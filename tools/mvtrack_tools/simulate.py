@@ -26,7 +26,7 @@ import numpy as np
 from tqdm import tqdm
 
 from .lcmio import LivePublisher, LogWriter, camera_frame, ground_truth
-from .rig import Rig, smartroom
+from .rig import Rig, random_rig, smartroom
 from .crowd import DetectorModel, Scene, crowd_scene, detect, interaction_scene
 from .scenes import Occlusions, WalkModel, head_detections
 
@@ -120,6 +120,13 @@ def main(argv: list[str] | None = None) -> int:
                          "--sigma, --miss, --fa and --no-merge do not apply (the pixels decide)")
     ap.add_argument("--no-colour", action="store_true", help="with --render: masks without hue/saturation (MS)")
     ap.add_argument("--mask-scale", type=int, default=4, help="with --render: image pixels per mask pixel (default 4)")
+    ap.add_argument("--video", type=Path, metavar="DIR",
+                    help="crowd, interaction: render RGB video per camera (DIR/<camera>.avi, MJPEG) through the "
+                         "rig's lens model, with GROUND_TRUTH in --log; run tools/mvtrack detect on it")
+    ap.add_argument("--rig-seed", type=int, default=0, metavar="N",
+                    help="0 (default): the smart room; N: a random room and rig from seed N (--cameras)")
+    ap.add_argument("--cameras", type=int, default=5, help="cameras of a --rig-seed rig (default 5)")
+    ap.add_argument("--jobs", type=int, default=2, help="--video: cameras rendered in parallel (default 2)")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--rig", type=Path, required=True, help="rig file to write (CONTRACT section 2)")
     ap.add_argument("--log", type=Path, help="LCM log to write")
@@ -135,7 +142,11 @@ def main(argv: list[str] | None = None) -> int:
         ap.error("--render applies to crowd and interaction")
     if not 1 <= a.mask_scale <= 16:
         ap.error("--mask-scale must be in 1..16")
-    rig = smartroom()
+    if a.video is not None and (a.scene == "exp1" or a.render or a.live is not None):
+        ap.error("--video applies to crowd and interaction, with --log (ground truth), without --render")
+    if not 2 <= a.cameras <= 16:
+        ap.error("--cameras must be 2..16")
+    rig = smartroom() if not a.rig_seed else random_rig(np.random.default_rng(a.rig_seed), a.cameras)
     a.rig.parent.mkdir(parents=True, exist_ok=True)
     rig.write(a.rig)
     if a.log is not None:
@@ -151,7 +162,18 @@ def main(argv: list[str] | None = None) -> int:
             model = DetectorModel(a.sigma, a.miss, a.fa, not a.no_merge, a.jitter_ms,
                                   None if a.dropout_cam < 0 or a.scene == "interaction" else a.dropout_cam,
                                   a.dropout_s, 4.0)
-            if a.render:
+            if a.video is not None:
+                from .video import write_truth, write_video
+
+                if a.scene == "crowd":
+                    scene = crowd_scene(rig, a.seconds, a.seed, model=model)
+                else:
+                    scene = interaction_scene(rig, a.frames, a.seed, model=model)
+                write_truth(sink, scene)
+                res = write_video(a.video, scene, a.seed, jobs=a.jobs, progress=not a.quiet)
+                scene.info.update(videos=len(res), render_ms_per_frame=round(float(np.mean(
+                    [r["render_ms_per_frame"] for r in res])), 1))
+            elif a.render:
                 from .render import MaskModel, Renderer, write_rendered
 
                 scene = crowd_scene(rig, a.seconds, a.seed, model=model) if a.scene == "crowd" else \
