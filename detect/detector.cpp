@@ -13,6 +13,7 @@ namespace {
 constexpr int kMaxFragments = 256;   /* largest components kept per frame */
 constexpr int kMinFragmentPx = 4;    /* working pixels: smaller components are noise */
 constexpr double kHeadRadiusM = 0.10;
+constexpr float kHeadMinM = 1.3f;    /* a fragment reaching this high at its own place has a head */
 
 float dot2(const float a[2], float x, float y) { return a[0] * x + a[1] * y; }
 
@@ -48,8 +49,9 @@ std::string check_config(const Config &c, int width, int height)
                    " is not a multiple of the mask scale " + std::to_string(c.mask_scale);
         }
     }
-    if (c.history < 1) {
-        return "history must be >= 1";
+    if (!(c.frame_rate > 0.0) || !(c.history_s * c.frame_rate >= 1.0) || !(c.bootstrap_s >= 0.0) ||
+        c.bootstrap_s * c.frame_rate > 1000.0) {
+        return "history must be at least one frame, bootstrap 0..1000 frames, frame rate > 0";
     }
     if (!(c.var_threshold > 0.0)) {
         return "variance threshold must be > 0";
@@ -73,12 +75,14 @@ Detector::Detector(const mvt_camera_t &cam, const double volume_min[3], const do
         vmax_[i] = volume_max[i];
     }
     if (cfg_.model == BgModel::mog2) {
-        bg_ = cv::createBackgroundSubtractorMOG2(cfg_.history, cfg_.var_threshold, cfg_.shadows);
+        bg_ = cv::createBackgroundSubtractorMOG2(history_frames_, cfg_.var_threshold, cfg_.shadows);
     } else {
-        bg_ = cv::createBackgroundSubtractorKNN(cfg_.history, cfg_.var_threshold, cfg_.shadows);
+        bg_ = cv::createBackgroundSubtractorKNN(history_frames_, cfg_.var_threshold, cfg_.shadows);
     }
     open_kernel_ = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(3, 3));
     close_kernel_ = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(5, 5));
+    history_frames_ = std::max(1, (int)std::lround(cfg_.history_s * cfg_.frame_rate));
+    bootstrap_frames_ = (int)std::lround(cfg_.bootstrap_s * cfg_.frame_rate);
     wsmall_ = cam_.width / cfg_.work_scale;
     hsmall_ = cam_.height / cfg_.work_scale;
 }
@@ -160,6 +164,7 @@ Detector::Column Detector::column_at(const double g[3]) const
             continue;
         }
         c.half[c.n] = (float)(cfg_.person_radius_m * fw / depth);
+        c.z[c.n] = (float)x[2];
         c.n++;
     }
     if (c.n < 2) {
@@ -209,6 +214,20 @@ bool Detector::in_column(const Column &c, float x, float y)
         }
     }
     return false;
+}
+
+float Detector::height_at(const Column &c, float x, float y)
+{
+    float best = 1e30f, z = 0.f;
+    for (int k = 0; k + 1 < c.n; k++) {
+        float t;
+        const float d2 = seg_dist2(c.axis[k], c.axis[k + 1], x, y, &t);
+        if (d2 < best) {
+            best = d2;
+            z = c.z[k] + t * (c.z[k + 1] - c.z[k]);
+        }
+    }
+    return z;
 }
 
 void Detector::measure(const std::vector<cv::Point> &pix, const Column &col, const cv::Mat &hsv,
@@ -278,6 +297,22 @@ void Detector::measure(const std::vector<cv::Point> &pix, const Column &col, con
     }
 }
 
+void Detector::fill_masks(const cv::Mat &bgr, Result &out)
+{
+    if (!cfg_.masks) {
+        return;
+    }
+    const cv::Size ms(cam_.width / cfg_.mask_scale, cam_.height / cfg_.mask_scale);
+    cv::resize(fg_, mask_tmp_, ms, 0, 0, cv::INTER_AREA);
+    cv::threshold(mask_tmp_, out.mask, 127, 1, cv::THRESH_BINARY);
+    cv::resize(bgr, mask_bgr_, ms, 0, 0, cv::INTER_AREA);
+    cv::cvtColor(mask_bgr_, mask_hsv_, cv::COLOR_BGR2HSV_FULL);
+    cv::Mat ch[3];
+    cv::split(mask_hsv_, ch);
+    out.hue = ch[0];
+    out.saturation = ch[1];
+}
+
 void Detector::process(const cv::Mat &bgr, Result &out)
 {
     CV_Assert(bgr.type() == CV_8UC3 && bgr.cols == cam_.width && bgr.rows == cam_.height);
@@ -288,23 +323,51 @@ void Detector::process(const cv::Mat &bgr, Result &out)
     } else {
         cv::resize(bgr, small_, cv::Size(wsmall_, hsmall_), 0, 0, cv::INTER_AREA);
     }
-    bg_->apply(small_, fg_raw_, cfg_.learning_rate);
+    out.warming_up = false;
+    out.gain = 1.0f;
+    if (cfg_.gain_compensation) { /* the background's brightness now against its reference */
+        const cv::Scalar m = prev_fg_.empty() ? cv::mean(small_) : cv::mean(small_, prev_fg_ == 0);
+        const double now = (m[0] + m[1] + m[2]) / 3.0;
+        if (ref_brightness_ < 0.0) {
+            ref_brightness_ = now;
+        }
+        if (now > 1.0) {
+            const double g = std::min(1.5, std::max(0.67, ref_brightness_ / now));
+            out.gain = (float)g;
+            small_.convertTo(tmp_, -1, g);
+            small_ = tmp_.clone();
+        }
+    }
+    if (frames_ < bootstrap_frames_) { /* collect, then start the model from the median */
+        boot_.push_back(small_.clone());
+        frames_++;
+        out.warming_up = true;
+        if ((int)boot_.size() == bootstrap_frames_) {
+            cv::Mat median(small_.size(), small_.type());
+            std::vector<uint8_t> v(boot_.size());
+            const size_t n_bytes = median.total() * median.elemSize();
+            for (size_t i = 0; i < n_bytes; i++) {
+                for (size_t f = 0; f < boot_.size(); f++) {
+                    v[f] = boot_[f].data[i];
+                }
+                std::nth_element(v.begin(), v.begin() + (long)(v.size() / 2), v.end());
+                median.data[i] = v[v.size() / 2];
+            }
+            boot_.clear();
+            bg_->apply(median, fg_raw_, 1.0);
+        }
+        fg_ = cv::Mat::zeros(small_.size(), CV_8U);
+        fill_masks(bgr, out);
+        return;
+    }
+    frames_++;
+    bg_->apply(small_, fg_raw_, cfg_.learning_rate >= 0.0 ? cfg_.learning_rate : 1.0 / history_frames_);
     cv::threshold(fg_raw_, fg_, 200, 255, cv::THRESH_BINARY); /* shadows are 127 */
     cv::morphologyEx(fg_, tmp_, cv::MORPH_OPEN, open_kernel_);
     cv::morphologyEx(tmp_, fg_, cv::MORPH_CLOSE, close_kernel_);
+    prev_fg_ = fg_.clone();
 
-    if (cfg_.masks) {
-        const cv::Size ms(cam_.width / cfg_.mask_scale, cam_.height / cfg_.mask_scale);
-        cv::resize(fg_, tmp_, ms, 0, 0, cv::INTER_AREA);
-        cv::threshold(tmp_, out.mask, 127, 1, cv::THRESH_BINARY);
-        cv::Mat small_bgr, hsv;
-        cv::resize(bgr, small_bgr, ms, 0, 0, cv::INTER_AREA);
-        cv::cvtColor(small_bgr, hsv, cv::COLOR_BGR2HSV_FULL);
-        cv::Mat ch[3];
-        cv::split(hsv, ch);
-        out.hue = ch[0];
-        out.saturation = ch[1];
-    }
+    fill_masks(bgr, out);
 
     const int n = cv::connectedComponentsWithStats(fg_, labels_, stats_, centroids_, 8, CV_32S);
     /* keep the largest components */
@@ -389,8 +452,21 @@ void Detector::process(const cv::Mat &bgr, Result &out)
         }
         group[k] = gi;
         if (c.valid) {
+            /* a seed with a head (its top above head_min_m) takes what overlaps it, up to a little
+             * above its top; a seed without one (legs, a lower body) takes the column's height */
+            float a_top = -1e30f, top_x = 0.f, top_y = 0.f;
+            for (const cv::Point &p : pix[k]) {
+                const float a = dot2(c.up, (float)p.x, (float)p.y);
+                if (a > a_top) {
+                    a_top = a;
+                    top_x = (float)p.x;
+                    top_y = (float)p.y;
+                }
+            }
+            const float h_seed = height_at(c, top_x, top_y);
+            const float h_max = h_seed >= kHeadMinM ? h_seed + 0.25f : (float)cfg_.column_height_m;
             for (int j : order) {
-                if (group[j] < 0 && in_column(c, fr[j].cx, fr[j].cy)) {
+                if (group[j] < 0 && in_column(c, fr[j].cx, fr[j].cy) && height_at(c, fr[j].cx, fr[j].cy) <= h_max) {
                     group[j] = gi;
                 }
             }

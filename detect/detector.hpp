@@ -45,10 +45,18 @@ enum class BgModel { mog2, knn };
 struct Config {
     BgModel model = BgModel::mog2;
     int work_scale = 2;              /* image pixels per working pixel, 1..8 */
-    int history = 500;               /* frames the background model remembers */
+    double history_s = 120.0;        /* the background model's memory, seconds (a person standing
+                                      * still fades into it after about a tenth of that) */
+    double frame_rate = 25.0;        /* frames per second (the rig's), to turn seconds into frames */
     double var_threshold = 16.0;     /* MOG2: squared Mahalanobis distance; KNN: squared distance (400) */
     bool shadows = true;             /* detect shadows (darker, same chromaticity) and drop them */
-    double learning_rate = -1.0;     /* < 0: OpenCV's automatic rate 1/min(frames, history) */
+    double learning_rate = -1.0;     /* < 0: 1/history */
+    double bootstrap_s = 2.0;        /* the model starts from the per-pixel median of the first
+                                      * frames (people walking through are not in it); no blobs
+                                      * meanwhile. OpenCV's own start (rate 1/frames until `history`)
+                                      * would learn anyone standing still within seconds */
+    bool gain_compensation = true;   /* scale each frame so that its background pixels keep the
+                                      * brightness they had (illumination drift, flicker, auto gain) */
     double person_radius_m = 0.35;   /* half-width of the column that collects one body's fragments */
     double column_height_m = 2.2;    /* the column's top above the floor */
     double body_half_width_m = 0.22; /* a standing person's half-width, for the expected silhouette */
@@ -73,6 +81,8 @@ struct Result {
     int fragments = 0;               /* connected components kept before grouping */
     int dropped_small = 0;           /* groups too small for a person */
     int dropped_border = 0;          /* groups whose head top is cut by the image border */
+    bool warming_up = false;         /* the background model is still being initialised: no blobs */
+    float gain = 1.0f;               /* illumination gain applied to this frame */
     int splits = 0;                  /* extra blobs made by splitting groups */
 };
 
@@ -98,6 +108,7 @@ class Detector {
         int n = 0;
         float up[2] = {0, -1};       /* unit image direction of the world's vertical */
         float height_px = 0;         /* image length of a standing person */
+        float z[12];                 /* heights of the axis points, metres */
         float px_per_m = 0;          /* image length of a horizontal metre at mid-body */
         float head_offset_px = 0;    /* head sphere's rim beyond the head top, along up */
         float expected_area = 0;     /* expected silhouette area */
@@ -108,6 +119,8 @@ class Detector {
     void local_up(float xw, float yw, float up[2]) const;
     Column column_at(const double g[3]) const;
     static bool in_column(const Column &c, float x, float y);
+    static float height_at(const Column &c, float x, float y);
+    void fill_masks(const cv::Mat &bgr, Result &out);
     void measure(const std::vector<cv::Point> &pix, const Column &col, const cv::Mat &hsv, const cv::Rect &roi,
                  Blob &b, bool *at_border) const;
 
@@ -116,8 +129,13 @@ class Detector {
     Config cfg_;
     cv::Ptr<cv::BackgroundSubtractor> bg_;
     cv::Mat small_, fg_raw_, fg_, tmp_, labels_, stats_, centroids_, hsv_;
-    cv::Mat open_kernel_, close_kernel_;
+    cv::Mat open_kernel_, close_kernel_, mask_tmp_, mask_bgr_, mask_hsv_;
     int wsmall_ = 0, hsmall_ = 0;
+    int64_t frames_ = 0;
+    std::vector<cv::Mat> boot_;      /* the first frames, for the median background */
+    int history_frames_ = 1, bootstrap_frames_ = 0;
+    double ref_brightness_ = -1.0;   /* mean background brightness the frames are scaled to */
+    cv::Mat prev_fg_;                /* last frame's foreground (its complement measures the gain) */
 };
 
 } // namespace mvdet

@@ -62,7 +62,11 @@ void usage(FILE *f)
         "  --mask-scale N          image pixels per mask pixel (default 4: 192x144 for 768x576)\n"
         "  --bg mog2|knn           background model (default mog2)\n"
         "  --work-scale N          image pixels per working pixel (default 2)\n"
-        "  --history N             frames the background model remembers (default 500)\n"
+        "  --history-s S           the background model's memory in seconds (default 120: a person\n"
+        "                          standing still fades into the background after about S/10)\n"
+        "  --bootstrap-s S         seconds of video whose per-pixel median starts the background model\n"
+        "                          (default 2; no blobs meanwhile)\n"
+        "  --no-gain-compensation  do not scale frames to the background's reference brightness\n"
         "  --var-threshold X       mog2: squared Mahalanobis distance (default 16); knn: squared\n"
         "                          distance (default 400)\n"
         "  --no-shadows            do not detect shadows (they become foreground)\n"
@@ -171,14 +175,15 @@ int main(int argc, char **argv)
     bool progress = false, quiet = false;
     mvdet::Config cfg;
 
-    enum { O_RIG = 1000, O_VIDEO, O_OUT, O_START, O_MASKS, O_MASK_SCALE, O_BG, O_WORK, O_HISTORY, O_VAR,
+    enum { O_RIG = 1000, O_VIDEO, O_OUT, O_START, O_MASKS, O_MASK_SCALE, O_BG, O_WORK, O_HISTORY, O_BOOT, O_NO_GAIN, O_VAR,
            O_NO_SHADOWS, O_MINFRAC, O_SIGMA, O_MAXF, O_STATUS, O_THREADS, O_PROGRESS, O_QUIET };
     static const struct option opts[] = {
         {"rig", required_argument, nullptr, O_RIG}, {"video", required_argument, nullptr, O_VIDEO},
         {"out", required_argument, nullptr, O_OUT}, {"start-utime", required_argument, nullptr, O_START},
         {"masks", no_argument, nullptr, O_MASKS}, {"mask-scale", required_argument, nullptr, O_MASK_SCALE},
         {"bg", required_argument, nullptr, O_BG}, {"work-scale", required_argument, nullptr, O_WORK},
-        {"history", required_argument, nullptr, O_HISTORY}, {"var-threshold", required_argument, nullptr, O_VAR},
+        {"history-s", required_argument, nullptr, O_HISTORY},
+        {"bootstrap-s", required_argument, nullptr, O_BOOT}, {"no-gain-compensation", no_argument, nullptr, O_NO_GAIN}, {"var-threshold", required_argument, nullptr, O_VAR},
         {"no-shadows", no_argument, nullptr, O_NO_SHADOWS},
         {"min-person-fraction", required_argument, nullptr, O_MINFRAC},
         {"sigma-px", required_argument, nullptr, O_SIGMA}, {"max-frames", required_argument, nullptr, O_MAXF},
@@ -219,9 +224,14 @@ int main(int argc, char **argv)
             cfg.work_scale = (int)iv;
             break;
         case O_HISTORY:
-            if (!parse_int64(optarg, &iv) || iv < 1 || iv > 100000) fail("--history must be 1..100000");
-            cfg.history = (int)iv;
+            if (!parse_double(optarg, &dv) || dv <= 0 || dv > 36000) fail("--history-s must be in (0, 36000]");
+            cfg.history_s = dv;
             break;
+        case O_BOOT:
+            if (!parse_double(optarg, &dv) || dv < 0 || dv > 40) fail("--bootstrap-s must be in [0, 40]");
+            cfg.bootstrap_s = dv;
+            break;
+        case O_NO_GAIN: cfg.gain_compensation = false; break;
         case O_VAR:
             if (!parse_double(optarg, &var_threshold) || !(var_threshold > 0)) fail("--var-threshold must be > 0");
             break;
@@ -267,6 +277,7 @@ int main(int argc, char **argv)
     if (mvtd_rig_load(rig_path.c_str(), 2.0, &rig, err, sizeof err) != 0) {
         fail(err);
     }
+    cfg.frame_rate = rig.frame_rate;
     std::vector<std::unique_ptr<Camera>> cams;
     for (const auto &v : videos) {
         const int k = mvtd_rig_find(&rig, v.first.c_str());

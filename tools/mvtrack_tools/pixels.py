@@ -70,14 +70,17 @@ def prepare(out: Path, rig_seed: int, cameras: int, kind: str, seed: int, second
     w.close()
     t0 = time.perf_counter()
     res = write_video(d, scene, seed, jobs=jobs, progress=progress)
-    info = {"people": len(scene.people), "frames": scene.n_frames, "render_s": round(time.perf_counter() - t0, 1),
+    info = {"people": len(scene.people), "frames": scene.n_frames, "lead_in_frames": res[0]["lead_in_frames"],
+            "render_s": round(time.perf_counter() - t0, 1),
             "render_ms_per_frame": round(float(np.mean([r["render_ms_per_frame"] for r in res])), 1)}
     stamp.write_text(json.dumps(info))
     return rig, rig_path, truth, info
 
 
-def detect(rig: Rig, d: Path, det: Path, extra: list[str], progress: bool) -> float:
-    args = ["--rig", str(d / "rig.yaml"), "--out", f"file://{det}?mode=w", "--start-utime", str(T0_UTIME), "--masks",
+def detect(rig: Rig, d: Path, det: Path, lead: int, extra: list[str], progress: bool) -> float:
+    """mvtrack-detect over every camera's video; video frame i is stamped as scene frame i - lead."""
+    start = T0_UTIME - int(round(lead * 1e6 / rig.frame_rate))
+    args = ["--rig", str(d / "rig.yaml"), "--out", f"file://{det}?mode=w", "--start-utime", str(start), "--masks",
             "--status-s", "0", "--quiet"]
     for c in rig.cameras:
         args += ["--video", f"{c.name}={d / (c.name + '.avi')}"]
@@ -88,7 +91,7 @@ def detect(rig: Rig, d: Path, det: Path, extra: list[str], progress: bool) -> fl
     return time.perf_counter() - t0
 
 
-def camera_view(path: Path, rig: Rig, d: Path, det: Path, trk: Path, k: int, frame: int, title: str) -> None:
+def camera_view(path: Path, rig: Rig, d: Path, det: Path, trk: Path, k: int, frame: int, lead: int, title: str) -> None:
     """One camera's frame with its detections (boxes, head points) and the tracks reprojected."""
     import cv2
     import lcm
@@ -97,7 +100,7 @@ def camera_view(path: Path, rig: Rig, d: Path, det: Path, trk: Path, k: int, fra
 
     cam = rig.cameras[k]
     cap = cv2.VideoCapture(str(d / f"{cam.name}.avi"))
-    cap.set(cv2.CAP_PROP_POS_FRAMES, frame)
+    cap.set(cv2.CAP_PROP_POS_FRAMES, frame + lead)
     ok, img = cap.read()
     if not ok:
         return
@@ -105,7 +108,7 @@ def camera_view(path: Path, rig: Rig, d: Path, det: Path, trk: Path, k: int, fra
     for ev in lcm.EventLog(str(det), "r"):
         if ev.channel == f"DETECTIONS_{cam.name}":
             m = mt.camera_frame_t.decode(ev.data)
-            if m.frame == frame:
+            if m.frame == frame + lead:
                 dets = list(m.detections)
                 break
     utime = T0_UTIME + int(round(frame * 1e6 / rig.frame_rate))
@@ -165,7 +168,7 @@ def main(argv: list[str] | None = None) -> int:
                                                      progress)
                 d = rig_path.parent
                 det = d / "detections.lcm"
-                det_s = detect(rig, d, det, shlex.split(a.detect_args), progress)
+                det_s = detect(rig, d, det, info["lead_in_frames"], shlex.split(a.detect_args), progress)
                 gt = read_log(str(truth), lambda c: c == "GROUND_TRUTH")
                 for mode in a.modes:
                     trk = d / f"tracks_{mode}.lcm"
@@ -182,7 +185,7 @@ def main(argv: list[str] | None = None) -> int:
                         plots.zenithal_multi(a.out / f"{name}_zenithal.png", rig, gt, tr, ttl)
                         if seed == 1:
                             camera_view(a.out / f"{name}_view.png", rig, d, det, trk, 0, min(info["frames"] - 1, 200),
-                                        ttl)
+                                        info["lead_in_frames"], ttl)
                     print(f"{name}: MOTA {r['mota']:.3f} MOTP {r['motp_mm']:.1f} mm switches {r['id_switches']} "
                           f"IDF1 {r['idf1']:.3f} FP {r['false_positives']} miss {r['misses']}", flush=True)
     (a.out / "summary.json").write_text(json.dumps(rows, indent=1, default=float))

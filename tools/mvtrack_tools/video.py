@@ -16,7 +16,8 @@ distortion), so straight walls bend as they do in the camera. The scene:
   Gaussian sensor noise, and lossy compression (MJPEG in AVI through cv2.VideoWriter, quality
   `jpeg_quality`).
 
-Capture jitter comes from the scene's DetectorModel (each camera's frame is the scene at a
+Each video starts with `lead_in_s` of the empty room (as a detector running continuously has seen
+it): video frame i is scene frame i - lead. Capture jitter comes from the scene's DetectorModel (each camera's frame is the scene at a
 slightly different time); cameras never drop out here (a video file has every frame).
 
 Output: one `<camera>.avi` per rig camera, and GROUND_TRUTH messages (head tops) in an LCM log.
@@ -47,6 +48,7 @@ class VideoModel:
     vignette: float = 0.25         # brightness loss at the image corners
     jpeg_quality: int = 80
     shadows: bool = True
+    lead_in_s: float = 2.0         # empty room before the scene's frame 0 (the background model's start)
 
 
 def _hsv(h: float, s: float, v: float) -> np.ndarray:
@@ -410,14 +412,22 @@ def _render_camera(args) -> dict:
     gait = gait_tables(scene, dt)
     rng = np.random.default_rng(seed * 7 + k)
     t0 = time.perf_counter()
+    lead = lead_in_frames(rig, model)
+    for f in range(-lead, 0):
+        wr.write(r.frame([], f * dt))
     for f in range(scene.n_frames):
         off = rng.uniform(-scene.model.jitter_ms, scene.model.jitter_ms) * 1e-3 if scene.model.jitter_ms > 0 else 0.0
         wr.write(r.frame(poses(scene, f, off, clothes, gait), f * dt + off))
         if progress_q is not None and f % 10 == 9:
             progress_q.put(10)
     wr.release()
-    return {"camera": cam.name, "path": str(path), "frames": scene.n_frames,
+    return {"camera": cam.name, "path": str(path), "frames": scene.n_frames, "lead_in_frames": lead,
             "render_ms_per_frame": 1e3 * (time.perf_counter() - t0) / max(scene.n_frames, 1)}
+
+
+def lead_in_frames(rig: Rig, model: VideoModel) -> int:
+    """Frames of empty room before the scene: video frame i shows scene frame i - lead_in_frames."""
+    return int(round(model.lead_in_s * rig.frame_rate))
 
 
 def write_video(out_dir: Path, scene: Scene, seed: int, model: VideoModel | None = None, jobs: int = 2,
