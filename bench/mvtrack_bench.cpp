@@ -17,6 +17,9 @@
  *                              and hue/saturation (the likelihood images are built inside the
  *                              step), 4 people walking, 1000 particles each, MS+C; 600 frames,
  *                              each timed alone, the first 50 (births) excluded
+ *   detect_frame_768x576       mvtrack-detect's work per frame on real 768 x 576 footage (vtest.avi)
+ *                              on one core, each frame timed alone (bench/detect_bench.cpp); the
+ *                              peer line NAME.with_decode includes decoding the frame
  */
 #include <algorithm>
 #include <chrono>
@@ -28,6 +31,7 @@
 
 #include <Eigen/Dense>
 
+#include "detect_bench.hpp"
 #include "mvt_pft.h"
 #include "mvt_tracker.h"
 
@@ -266,12 +270,12 @@ int main(int argc, char **argv)
     for (const auto &w : want) {
         if (w == "--help" || w == "-h") {
             std::printf("usage: mvtrack-bench [filter_update_5cam] [tracker_frame_5cam_1target] "
-                        "[tracker_frame_8cam_16people] [pf_frame_5cam_4targets]\n"
+                        "[tracker_frame_8cam_16people] [pf_frame_5cam_4targets] [detect_frame_768x576]\n"
                         "Prints one JSON object per benchmark (peers: NAME.eigen).\n");
             return 0;
         }
         if (w != "filter_update_5cam" && w != "tracker_frame_5cam_1target" && w != "tracker_frame_8cam_16people" &&
-            w != "pf_frame_5cam_4targets") {
+            w != "pf_frame_5cam_4targets" && w != "detect_frame_768x576") {
             std::fprintf(stderr, "mvtrack-bench: unknown benchmark '%s'\n", w.c_str());
             return 2;
         }
@@ -423,6 +427,10 @@ int main(int argc, char **argv)
     }
     if (enabled("pf_frame_5cam_4targets")) {
         bench_pf(rig.cams);
+    }
+    if (enabled("detect_frame_768x576") &&
+        bench_detect(MVT_VTEST_VIDEO, MVT_SOURCE_DIR "/tests/data/vtest_rig.yaml") != 0) {
+        return 1;
     }
     return 0;
 }

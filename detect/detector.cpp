@@ -297,7 +297,7 @@ void Detector::measure(const std::vector<cv::Point> &pix, const Column &col, con
     }
 }
 
-void Detector::fill_masks(const cv::Mat &bgr, Result &out)
+void Detector::fill_masks(Result &out)
 {
     if (!cfg_.masks) {
         return;
@@ -305,7 +305,7 @@ void Detector::fill_masks(const cv::Mat &bgr, Result &out)
     const cv::Size ms(cam_.width / cfg_.mask_scale, cam_.height / cfg_.mask_scale);
     cv::resize(fg_, mask_tmp_, ms, 0, 0, cv::INTER_AREA);
     cv::threshold(mask_tmp_, out.mask, 127, 1, cv::THRESH_BINARY);
-    cv::resize(bgr, mask_bgr_, ms, 0, 0, cv::INTER_AREA);
+    cv::resize(colour_, mask_bgr_, ms, 0, 0, cv::INTER_AREA);
     cv::cvtColor(mask_bgr_, mask_hsv_, cv::COLOR_BGR2HSV_FULL);
     cv::Mat ch[3];
     cv::split(mask_hsv_, ch);
@@ -321,8 +321,12 @@ void Detector::process(const cv::Mat &bgr, Result &out)
     if (cfg_.work_scale == 1) {
         small_ = bgr;
     } else {
-        cv::resize(bgr, small_, cv::Size(wsmall_, hsmall_), 0, 0, cv::INTER_AREA);
+        cv::resize(bgr, resized_, cv::Size(wsmall_, hsmall_), 0, 0, cv::INTER_AREA);
+        small_ = resized_;
     }
+    /* colour comes from the frame as captured (hue and saturation do not depend on the gain); the
+     * mask's colour is downscaled from the working image when the scales allow it */
+    colour_ = (cfg_.mask_scale % cfg_.work_scale == 0) ? small_ : bgr;
     out.warming_up = false;
     out.gain = 1.0f;
     if (cfg_.gain_compensation) { /* the background's brightness now against its reference */
@@ -334,8 +338,8 @@ void Detector::process(const cv::Mat &bgr, Result &out)
         if (now > 1.0) {
             const double g = std::min(1.5, std::max(0.67, ref_brightness_ / now));
             out.gain = (float)g;
-            small_.convertTo(tmp_, -1, g);
-            small_ = tmp_.clone();
+            small_.convertTo(gained_, -1, g);
+            small_ = gained_;
         }
     }
     if (frames_ < bootstrap_frames_) { /* collect, then start the model from the median */
@@ -357,7 +361,7 @@ void Detector::process(const cv::Mat &bgr, Result &out)
             bg_->apply(median, fg_raw_, 1.0);
         }
         fg_ = cv::Mat::zeros(small_.size(), CV_8U);
-        fill_masks(bgr, out);
+        fill_masks(out);
         return;
     }
     frames_++;
@@ -367,7 +371,7 @@ void Detector::process(const cv::Mat &bgr, Result &out)
     cv::morphologyEx(tmp_, fg_, cv::MORPH_CLOSE, close_kernel_);
     prev_fg_ = fg_.clone();
 
-    fill_masks(bgr, out);
+    fill_masks(out);
 
     const int n = cv::connectedComponentsWithStats(fg_, labels_, stats_, centroids_, 8, CV_32S);
     /* keep the largest components */

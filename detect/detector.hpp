@@ -120,7 +120,7 @@ class Detector {
     Column column_at(const double g[3]) const;
     static bool in_column(const Column &c, float x, float y);
     static float height_at(const Column &c, float x, float y);
-    void fill_masks(const cv::Mat &bgr, Result &out);
+    void fill_masks(Result &out);
     void measure(const std::vector<cv::Point> &pix, const Column &col, const cv::Mat &hsv, const cv::Rect &roi,
                  Blob &b, bool *at_border) const;
 
@@ -128,7 +128,7 @@ class Detector {
     double vmin_[3], vmax_[3];
     Config cfg_;
     cv::Ptr<cv::BackgroundSubtractor> bg_;
-    cv::Mat small_, fg_raw_, fg_, tmp_, labels_, stats_, centroids_, hsv_;
+    cv::Mat small_, resized_, gained_, colour_, fg_raw_, fg_, tmp_, labels_, stats_, centroids_, hsv_;
     cv::Mat open_kernel_, close_kernel_, mask_tmp_, mask_bgr_, mask_hsv_;
     int wsmall_ = 0, hsmall_ = 0;
     int64_t frames_ = 0;

@@ -26,6 +26,7 @@
 #include <lcm/lcm.h>
 #include <opencv2/core.hpp>
 #include <opencv2/core/utility.hpp>
+#include <opencv2/core/utils/logger.hpp>
 
 #include "detector.hpp"
 #include "mvtrack_camera_frame_t.h"
@@ -271,6 +272,8 @@ int main(int argc, char **argv)
     cfg.model = bg == "knn" ? mvdet::BgModel::knn : mvdet::BgModel::mog2;
     cfg.var_threshold = var_threshold > 0 ? var_threshold : (cfg.model == mvdet::BgModel::knn ? 400.0 : 16.0);
     cv::setNumThreads(threads);
+    /* OpenCV's backends log every probe that fails; this program says what failed in one line */
+    cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);
 
     static mvtd_rig_t rig;
     char err[512];

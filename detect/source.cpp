@@ -42,6 +42,9 @@ bool Source::open_capture()
         if (all_digits(spec_)) {
             return cap_.open(std::atoi(spec_.c_str()));
         }
+        if (!live_ && spec_.find('%') == std::string::npos && cap_.open(spec_, cv::CAP_FFMPEG)) {
+            return true; /* files: FFmpeg first (GStreamer's file probing is slow and noisy) */
+        }
         return cap_.open(spec_);
     } catch (const cv::Exception &) {
         return false;
@@ -67,7 +70,7 @@ std::string Source::open(const std::string &spec, int width, int height, double 
         return spec + ": no such file";
     }
     if (!open_capture()) {
-        return spec + ": cannot be opened as video (cv::VideoCapture refused it)";
+        return spec + ": not a video cv::VideoCapture can open";
     }
     if (!live_) {
         frame_count_ = cap_.get(cv::CAP_PROP_FRAME_COUNT);
