@@ -153,15 +153,17 @@ double percentile(std::vector<double> v, double q)
     return v[i];
 }
 
+/* counters since start; detection time over `when` */
 void status_line(const Camera &c, const char *when, const std::vector<double> &ms)
 {
     const mvdet::SourceStats &s = c.source.stats();
     std::fprintf(stderr,
-                 "mvtrack-detect: %s %s: frames read %lld, dropped %lld, corrupt %lld, reconnects %lld; "
-                 "messages %lld, blobs %.2f per frame; detect p50 %.2f ms p99 %.2f ms\n",
-                 c.name.c_str(), when, (long long)s.read, (long long)s.dropped, (long long)s.corrupt,
+                 "mvtrack-detect: %s: frames read %lld, dropped %lld, corrupt %lld, reconnects %lld, "
+                 "messages %lld, blobs %.2f per frame; detect p50 %.2f ms p99 %.2f ms (%s)\n",
+                 c.name.c_str(), (long long)s.read, (long long)s.dropped, (long long)s.corrupt,
                  (long long)s.reconnects, (long long)c.messages,
-                 c.messages ? (double)c.blobs / (double)c.messages : 0.0, percentile(ms, 0.5), percentile(ms, 0.99));
+                 c.messages ? (double)c.blobs / (double)c.messages : 0.0, percentile(ms, 0.5), percentile(ms, 0.99),
+                 when);
 }
 
 } // namespace
@@ -443,7 +445,7 @@ int main(int argc, char **argv)
     int64_t publish_errors = 0;
     for (auto &cam : cams) {
         if (!quiet) {
-            status_line(*cam, "total", cam->all_ms);
+            status_line(*cam, "whole run", cam->all_ms);
         }
         publish_errors += cam->publish_errors;
     }

@@ -294,3 +294,32 @@ def test_rendered_video_to_tracks_on_a_random_rig(tmp_path):
         r = as_dict(clear_mot(pair_frames(gt, read_log(str(trk), lambda c: c == "TRACKS"), rig.frame_rate)))
         assert r["mota"] >= 0.85, (mode, r)
         assert r["id_switches"] == 0, (mode, r)
+
+
+def test_live_source_that_stops_is_reopened_and_stamped_with_host_time(tmp_path):
+    """A live source (a GStreamer pipeline that ends every 20 frames) is reopened with back-off and
+    counted, never a crash; its frames carry the host clock at grab; SIGTERM ends it with 0."""
+    import signal
+    import time
+
+    smartroom_rig(tmp_path)
+    pipe = ("videotestsrc num-buffers=20 is-live=true ! video/x-raw,width=768,height=576,framerate=25/1 ! "
+            "videoconvert ! video/x-raw,format=BGR ! appsink")
+    log = tmp_path / "live.lcm"
+    t0 = time.time()
+    p = subprocess.Popen([str(DETECT), "--rig", str(tmp_path / "rig.yaml"), "--video", f"cam0={pipe}",
+                          "--out", f"file://{log}?mode=w", "--status-s", "0"],
+                         stderr=subprocess.PIPE, text=True)
+    time.sleep(4.0)
+    p.send_signal(signal.SIGTERM)
+    _, err = p.communicate(timeout=20)
+    t1 = time.time()
+    assert p.returncode == 0, err
+    line = [x for x in err.splitlines() if "whole run" in x]
+    assert line, err
+    reconnects = int(line[0].split("reconnects ")[1].split(",")[0])
+    assert reconnects >= 2, line
+    msgs = messages(log)
+    assert len(msgs) >= 40
+    assert all(t0 * 1e6 <= m.utime <= t1 * 1e6 for m in msgs)
+    assert [m.utime for m in msgs] == sorted(m.utime for m in msgs)
