@@ -14,6 +14,7 @@ os.environ.setdefault("MVTRACK_BUILD", str(REPO / "build"))
 def pytest_configure(config):
     config.addinivalue_line("markers", "daemon: runs build/bin/mvtrackd on logs or live LCM")
     config.addinivalue_line("markers", "detect: runs build/bin/mvtrack-detect on video")
+    config.addinivalue_line("markers", "accuracy: detect tests that measure accuracy (not run under ASan)")
 
 
 @pytest.fixture

@@ -114,6 +114,7 @@ def detect_log(tmp_path: Path, rig_path: Path, videos: dict[str, Path], *extra: 
     return messages(log)
 
 
+@pytest.mark.accuracy
 def test_vtest_real_footage_finds_labelled_heads():
     """vtest.avi (real people, PETS 2009): >= 90 % of the hand-labelled heads within 15 px, <= 1
     false blob per labelled frame."""
@@ -264,6 +265,7 @@ def test_same_video_same_messages(tmp_path):
     assert [m.encode() for m in a] == [m.encode() for m in b]
 
 
+@pytest.mark.accuracy
 def test_rendered_video_to_tracks_on_a_random_rig(tmp_path):
     """The chain from pixels on a rig the detector was not tuned on: a random 4-camera room,
     rendered video of two people meeting -> mvtrack-detect -> mvtrackd pkf and pf: both people
