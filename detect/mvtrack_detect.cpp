@@ -75,6 +75,8 @@ void usage(FILE *f)
         "                          silhouette at their place (default 0.15)\n"
         "  --sigma-px X            1-sigma pixel noise written in each detection (default 0: the rig's)\n"
         "  --max-frames N          stop after N frames per source\n"
+        "  --realtime              pace file sources at the rig's frame rate (recorded video replayed as\n"
+        "                          if live; the utimes stay those of the frames)\n"
         "  --status-s S            status line on stderr every S seconds (default 5; 0: only at the end)\n"
         "  --threads N             OpenCV threads (default 1: one detector per core)\n"
         "  --progress              'progress I TOTAL' lines on stderr (for tools/mvtrack detect)\n"
@@ -175,11 +177,11 @@ int main(int argc, char **argv)
     long long start_utime = kDefaultStartUtime, max_frames = -1;
     double var_threshold = -1.0, status_s = 5.0, sigma_px = 0.0;
     int threads = 1;
-    bool progress = false, quiet = false;
+    bool progress = false, quiet = false, realtime = false;
     mvdet::Config cfg;
 
     enum { O_RIG = 1000, O_VIDEO, O_OUT, O_START, O_MASKS, O_MASK_SCALE, O_BG, O_WORK, O_HISTORY, O_BOOT, O_NO_GAIN, O_VAR,
-           O_NO_SHADOWS, O_MINFRAC, O_SIGMA, O_MAXF, O_STATUS, O_THREADS, O_PROGRESS, O_QUIET };
+           O_NO_SHADOWS, O_MINFRAC, O_SIGMA, O_MAXF, O_STATUS, O_THREADS, O_PROGRESS, O_QUIET, O_REALTIME };
     static const struct option opts[] = {
         {"rig", required_argument, nullptr, O_RIG}, {"video", required_argument, nullptr, O_VIDEO},
         {"out", required_argument, nullptr, O_OUT}, {"start-utime", required_argument, nullptr, O_START},
@@ -192,6 +194,7 @@ int main(int argc, char **argv)
         {"sigma-px", required_argument, nullptr, O_SIGMA}, {"max-frames", required_argument, nullptr, O_MAXF},
         {"status-s", required_argument, nullptr, O_STATUS}, {"threads", required_argument, nullptr, O_THREADS},
         {"progress", no_argument, nullptr, O_PROGRESS}, {"quiet", no_argument, nullptr, O_QUIET},
+        {"realtime", no_argument, nullptr, O_REALTIME},
         {"help", no_argument, nullptr, 'h'}, {nullptr, 0, nullptr, 0}};
     int c;
     long long iv;
@@ -258,6 +261,7 @@ int main(int argc, char **argv)
             break;
         case O_PROGRESS: progress = true; break;
         case O_QUIET: quiet = true; break;
+        case O_REALTIME: realtime = true; break;
         case 'h': usage(stdout); return 0;
         default: usage(stderr); return 2;
         }
@@ -338,7 +342,11 @@ int main(int argc, char **argv)
     std::vector<int32_t> runs;
     std::vector<uint8_t> hue_bytes, sat_bytes;
     int64_t step = 0;
+    const auto run_start = std::chrono::steady_clock::now();
     while (!g_stop) {
+        if (realtime) { /* step i starts i frame periods after the first */
+            std::this_thread::sleep_until(run_start + std::chrono::microseconds((int64_t)std::llround((double)step * period_us)));
+        }
         bool any = false, waiting = false;
         for (auto &cam : cams) {
             if (cam->ended) {
