@@ -42,6 +42,35 @@ def lcm_logger() -> str:
     return str(exe) if exe.exists() else "lcm-logger"
 
 
+class LiveDaemon:
+    """mvtrackd live on url and lcm-logger recording it to log_path, for the length of a with block;
+    then SIGTERM to the daemon (it finishes the frame in hand) and SIGINT to the logger. Raises
+    SystemExit when the daemon does not start or does not exit with 0."""
+
+    def __init__(self, rig_path: Path, url: str, out: Path, log_path: Path, extra: list[str] | None = None):
+        self.cmd = [str(DAEMON), "--rig", str(rig_path), "--in", url] + (extra or [])
+        self.url, self.log_path, self.stderr = url, log_path, out / "mvtrackd.stderr"
+
+    def __enter__(self) -> "LiveDaemon":
+        self.daemon = subprocess.Popen(self.cmd, stderr=open(self.stderr, "w"))
+        self.logger = subprocess.Popen([lcm_logger(), "-f", "-l", self.url, str(self.log_path)],
+                                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        time.sleep(0.7)
+        if self.daemon.poll() is not None:
+            self.logger.send_signal(signal.SIGINT)
+            raise SystemExit(f"[demo] mvtrackd exited early; see {self.stderr}")
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.daemon.send_signal(signal.SIGTERM)
+        rc = self.daemon.wait(timeout=10)
+        time.sleep(0.3)
+        self.logger.send_signal(signal.SIGINT)
+        self.logger.wait(timeout=10)
+        if rc != 0 and exc[0] is None:
+            raise SystemExit(f"[demo] mvtrackd exited with {rc}; see {self.stderr}")
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="mvtrack demo", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -74,27 +103,12 @@ def main(argv: list[str] | None = None) -> int:
 
     print(f"[demo] mvtrackd live on {a.url}, 5 cameras, {a.seconds:g} s at 25 fps, sigma^2 = {a.var:g} px^2"
           f"{', occlusion bursts' if occ else ''}")
-    daemon = subprocess.Popen([str(DAEMON), "--rig", str(rig_path), "--in", a.url, "--q", qs],
-                              stderr=open(out / "mvtrackd.stderr", "w"))
-    logger = subprocess.Popen([lcm_logger(), "-f", "-l", a.url, str(log_path)], stdout=subprocess.DEVNULL,
-                              stderr=subprocess.DEVNULL)
-    try:
-        time.sleep(0.7)
-        if daemon.poll() is not None:
-            raise SystemExit(f"[demo] mvtrackd exited early; see {out / 'mvtrackd.stderr'}")
+    with LiveDaemon(rig_path, a.url, out, log_path, ["--q", qs]):
         pub = LivePublisher(a.url)
         t0 = time.monotonic()
         write_scene(pub, rig, states, dets, a.var, progress=True)
         wall = time.monotonic() - t0
         time.sleep(0.5)
-    finally:
-        daemon.send_signal(signal.SIGTERM)
-        rc = daemon.wait(timeout=10)
-        time.sleep(0.3)
-        logger.send_signal(signal.SIGINT)
-        logger.wait(timeout=10)
-    if rc != 0:
-        raise SystemExit(f"[demo] mvtrackd exited with {rc}; see {out / 'mvtrackd.stderr'}")
 
     live = read_log(str(log_path))
     n_tracks = len(live.tracks)
@@ -154,14 +168,7 @@ def pixels_demo(a: argparse.Namespace, out: Path) -> int:
     log_path = out / "live_pixels.lcm"
     print(f"[demo] mvtrackd live on {a.url}; mvtrack-detect replays the 5 videos at 25 fps "
           f"({info['people']} people, {(info['frames'] + lead) / rig.frame_rate:.0f} s with the empty-room start)")
-    daemon = subprocess.Popen([str(DAEMON), "--rig", str(rig_path), "--in", a.url],
-                              stderr=open(out / "mvtrackd.stderr", "w"))
-    logger = subprocess.Popen([lcm_logger(), "-f", "-l", a.url, str(log_path)], stdout=subprocess.DEVNULL,
-                              stderr=subprocess.DEVNULL)
-    try:
-        time.sleep(0.7)
-        if daemon.poll() is not None:
-            raise SystemExit(f"[demo] mvtrackd exited early; see {out / 'mvtrackd.stderr'}")
+    with LiveDaemon(rig_path, a.url, out, log_path):
         cmd = [str(DETECT), "--rig", str(rig_path), "--out", a.url, "--start-utime", str(start), "--realtime",
                "--status-s", "10"]
         for c in rig.cameras:
@@ -170,15 +177,8 @@ def pixels_demo(a: argparse.Namespace, out: Path) -> int:
         det = subprocess.run(cmd)
         wall = time.monotonic() - t0
         time.sleep(0.5)
-    finally:
-        daemon.send_signal(signal.SIGTERM)
-        rc = daemon.wait(timeout=10)
-        time.sleep(0.3)
-        logger.send_signal(signal.SIGINT)
-        logger.wait(timeout=10)
-    if det.returncode != 0 or rc != 0:
-        raise SystemExit(f"[demo] mvtrack-detect exited with {det.returncode}, mvtrackd with {rc}; "
-                         f"see {out / 'mvtrackd.stderr'}")
+    if det.returncode != 0:
+        raise SystemExit(f"[demo] mvtrack-detect exited with {det.returncode}")
     live = read_log(str(log_path), lambda c: c in ("TRACKS", "MVTRACK_STATUS"))
     gt = read_log(str(truth), lambda c: c == "GROUND_TRUTH")
     r = as_dict(clear_mot(pair_frames(gt, live, rig.frame_rate)))
