@@ -87,7 +87,7 @@ typedef struct mvt_tracker_config {
     int confirm_hits;           /* M of the last confirm_window frames seen -> confirmed; 3 */
     int confirm_window;         /* N, 1..32; default 5 */
     int tentative_max_misses;   /* consecutive misses that delete a tentative track; default 2 */
-    mvt_real coast_max_s;       /* a confirmed track unseen this long is deleted; default 1.0 */
+    mvt_real coast_max_s;       /* a confirmed track unseen this long is deleted; default 2.0 */
     mvt_real max_pos_std_m;     /* ... or when its position std exceeds this; default 1.0 */
     mvt_real volume_min[3];     /* tracked volume, metres (rig file) */
     mvt_real volume_max[3];

@@ -26,7 +26,6 @@ import time
 from pathlib import Path
 
 import numpy as np
-from tqdm import tqdm
 
 from . import plots
 from .evaluate import evaluate_single, learn_q, match_single

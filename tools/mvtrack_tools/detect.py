@@ -11,8 +11,8 @@ from __future__ import annotations
 import subprocess
 import sys
 
-from tqdm import tqdm
 
+from .progress import bar as progress_bar
 from .paths import BUILD
 
 DETECT = BUILD / "bin" / "mvtrack-detect"
@@ -32,8 +32,7 @@ def run(args: list[str], progress: bool = True, desc: str = "detect") -> int:
         if line.startswith("progress "):
             _, done, total = line.split()
             if bar is None:
-                bar = tqdm(total=int(float(total)) or None, desc=desc, unit="fr", leave=False,
-                           disable=not sys.stderr.isatty())
+                bar = progress_bar(total=int(float(total)) or None, desc=desc, unit="fr", leave=False)
             bar.update(int(done) - bar.n)
         else:
             sys.stderr.write(line)

@@ -16,8 +16,8 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
-from tqdm import tqdm
 
+from .progress import bar as progress_bar
 from . import plots
 from .evaluate import learn_q, match_single, pcrlb_position_mse
 from .lcmio import LogWriter, read_log
@@ -72,7 +72,7 @@ def main(argv: list[str] | None = None) -> int:
     keep_paths: dict[str, np.ndarray] = {}
     keep_gt = None
     model = WalkModel.for_room(rig.volume_min, rig.volume_max)
-    bar = tqdm(total=len(jobs), desc="experiment 1", unit="scene", disable=a.quiet)
+    bar = progress_bar(total=len(jobs), desc="experiment 1", unit="scene", enabled=not a.quiet)
 
     def one(job):
         occ, var, seed = job

@@ -20,8 +20,8 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
-from tqdm import tqdm
 
+from .progress import bar as progress_bar
 from . import plots
 from .experiment1 import run_daemon
 from .lcmio import LogWriter, read_log
@@ -55,7 +55,7 @@ def run_scenes(ap: argparse.ArgumentParser, a: argparse.Namespace, run_one, *arg
     rows: list[dict] = []
     with ThreadPoolExecutor(max_workers=max(1, a.jobs)) as ex:
         futs = [ex.submit(run_one, a.out, k, s, *args) for k, s in jobs]
-        for f in tqdm(futs, desc="scenes", unit="scene"):
+        for f in progress_bar(futs, desc="scenes", unit="scene"):
             rows.extend(f.result())
     return rows
 

@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
+from .progress import bar as progress_bar
 from .rig import Camera, Rig
 
 HEAD_R, TORSO_R, LEGS_R = 0.11, 0.19, 0.14
@@ -273,8 +274,7 @@ def mask_frame(utime: int, frame: int, cam: Camera, view: CameraView, scale: int
 def write_rendered(sink, scene, renderer: Renderer, seed: int, colour: bool = True, progress: bool = True) -> dict:
     """Like simulate.write_multi, but each camera's message is rendered: blobs from the mask, the
     mask and hue/saturation. Capture jitter and the dropout come from scene.model. Returns stats."""
-    from tqdm import tqdm
-
+    
     from .lcmio import ground_truth
     from .simulate import T0_UTIME
 
@@ -284,7 +284,7 @@ def write_rendered(sink, scene, renderer: Renderer, seed: int, colour: bool = Tr
     sigma_px = float(renderer.m.scale)
     pal = {p.gid: i for i, p in enumerate(sorted(scene.people, key=lambda p: p.gid))}
     stats = {"blobs": 0, "blobs_without_person": 0, "mask_bytes_max": 0, "dropped_messages": 0}
-    for f in tqdm(range(scene.n_frames), desc="render", unit="fr", disable=not progress, leave=False):
+    for f in progress_bar(range(scene.n_frames), desc="render", unit="fr", enabled=progress, leave=False):
         utime = T0_UTIME + f * dt_us
         present = scene.present(f)
         pos = np.array([p.pos[f - p.f0] for p in present]).reshape(-1, 3)

@@ -11,6 +11,8 @@ foreground masks (tens of kB a message, many UDP fragments) are not dropped on r
 """
 from __future__ import annotations
 
+from .progress import bar as progress_bar
+
 import argparse
 import os
 import re
@@ -68,8 +70,7 @@ def replay(log: Path, url: str, speed: float = 1.0, channels: str = ".*", loop: 
     t_start = time.monotonic()
     bar = None
     if progress:
-        from tqdm import tqdm
-        bar = tqdm(total=total, unit="ev", desc=f"replay {log.name}", leave=False)
+                bar = progress_bar(total=total, unit="ev", desc=f"replay {log.name}", leave=False)
     while True:
         t0_wall, t0_log = None, None
         for ev in lcm.EventLog(str(log), "r"):

@@ -23,8 +23,8 @@ import sys
 from pathlib import Path
 
 import numpy as np
-from tqdm import tqdm
 
+from .progress import bar as progress_bar
 from .lcmio import LivePublisher, LogWriter, camera_frame, ground_truth
 from .rig import Rig, random_rig, smartroom
 from .crowd import DetectorModel, Scene, crowd_scene, detect, interaction_scene
@@ -49,7 +49,7 @@ def write_scene(sink, rig: Rig, states: np.ndarray, dets, var_px2: float, progre
     dt_us = int(round(1e6 / rig.frame_rate))
     rng = np.random.default_rng(frame_order_seed)
     sd = float(np.sqrt(var_px2))
-    for f in tqdm(range(len(states)), desc="frames", unit="fr", disable=not progress, leave=False):
+    for f in progress_bar(range(len(states)), desc="frames", unit="fr", enabled=progress, leave=False):
         utime = T0_UTIME + f * dt_us
         sink.write(utime, "GROUND_TRUTH", ground_truth(utime, f, [1], states[f, :3][None]))
         for k in rng.permutation(len(rig.cameras)):  # cameras arrive in any order
@@ -64,7 +64,7 @@ def write_multi(sink, scene: Scene, frames, progress: bool = True) -> None:
     rig = scene.rig
     dt_us = int(round(1e6 / rig.frame_rate))
     rng = np.random.default_rng(len(frames))
-    for f in tqdm(range(scene.n_frames), desc="frames", unit="fr", disable=not progress, leave=False):
+    for f in progress_bar(range(scene.n_frames), desc="frames", unit="fr", enabled=progress, leave=False):
         utime = T0_UTIME + f * dt_us
         present = scene.present(f)
         pos = np.array([p.pos[f - p.f0] for p in present]).reshape(-1, 3)
@@ -182,7 +182,7 @@ def main(argv: list[str] | None = None) -> int:
                 stats = write_rendered(buf, scene, Renderer(rig, MaskModel(scale=a.mask_scale), seed=a.seed), a.seed,
                                        colour=not a.no_colour, progress=not a.quiet)
                 if a.live is not None:
-                    for ev in tqdm(buf.events, desc="publish", unit="msg", disable=a.quiet):
+                    for ev in progress_bar(buf.events, desc="publish", unit="msg", enabled=not a.quiet):
                         sink.write(*ev)
                 scene.info.update(stats)
             else:

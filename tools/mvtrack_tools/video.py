@@ -32,6 +32,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from .progress import bar as progress_bar
 from .crowd import Scene
 from .render import Box, default_furniture
 from .rig import Camera, Rig
@@ -435,8 +436,7 @@ def write_video(out_dir: Path, scene: Scene, seed: int, model: VideoModel | None
     """Renders every camera of scene.rig to out_dir/<camera>.avi (in `jobs` processes)."""
     import multiprocessing as mp
 
-    from tqdm import tqdm
-
+    
     model = model or VideoModel()
     out_dir.mkdir(parents=True, exist_ok=True)
     rig = scene.rig
@@ -446,7 +446,7 @@ def write_video(out_dir: Path, scene: Scene, seed: int, model: VideoModel | None
         with ctx.Pool(max(1, jobs)) as pool:
             res = pool.map_async(_render_camera, [(rig, scene, k, seed, out_dir, model, q) for k in range(len(rig.cameras))])
             total = scene.n_frames * len(rig.cameras)
-            with tqdm(total=total, desc="render video", unit="fr", disable=not progress, leave=False) as bar:
+            with progress_bar(total=total, desc="render video", unit="fr", enabled=progress, leave=False) as bar:
                 while not res.ready():
                     res.wait(0.5)
                     while q is not None and not q.empty():
