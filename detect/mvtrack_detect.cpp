@@ -317,6 +317,14 @@ int main(int argc, char **argv)
         if (!open_err.empty()) {
             fail("camera '" + v.first + "': " + open_err);
         }
+        const long mask_px = (long)(model.width / cfg.mask_scale) * (long)(model.height / cfg.mask_scale);
+        if (cfg.masks && mask_px > (long)MVT_MAX_MASK_PIXELS) {
+            std::fprintf(stderr,
+                         "mvtrack-detect: warning: camera '%s': a %dx%d mask has %ld pixels, more than mvtrackd's "
+                         "MVT_MAX_MASK_PIXELS (%ld), so the daemon will reject it; raise --mask-scale\n",
+                         v.first.c_str(), model.width / cfg.mask_scale, model.height / cfg.mask_scale, mask_px,
+                         (long)MVT_MAX_MASK_PIXELS);
+        }
         cam->detector = std::make_unique<mvdet::Detector>(model, rig.volume_min, rig.volume_max, cfg);
         cams.push_back(std::move(cam));
     }

@@ -325,3 +325,17 @@ def test_live_source_that_stops_is_reopened_and_stamped_with_host_time(tmp_path)
     assert len(msgs) >= 40
     assert all(t0 * 1e6 <= m.utime <= t1 * 1e6 for m in msgs)
     assert [m.utime for m in msgs] == sorted(m.utime for m in msgs)
+
+
+def test_masks_larger_than_the_daemon_accepts_are_warned(tmp_path):
+    """--mask-scale 1 on 768x576 makes masks mvtrackd's MVT_MAX_MASK_PIXELS refuses: one warning
+    at start, the run still works; the default scale gives no warning."""
+    smartroom_rig(tmp_path)
+    video = tmp_path / "v.avi"
+    write_video(video, [np.full((576, 768, 3), 90, np.uint8)] * 3)
+    base = ["--rig", str(tmp_path / "rig.yaml"), "--video", f"cam0={video}", "--masks", "--quiet",
+            "--out", f"file://{tmp_path / 'x.lcm'}?mode=w"]
+    big = run(*base, "--mask-scale", "1")
+    assert big.returncode == 0 and big.stderr.count("MVT_MAX_MASK_PIXELS") == 1, big.stderr
+    ok = run(*base)
+    assert ok.returncode == 0 and "warning" not in ok.stderr, ok.stderr
