@@ -45,6 +45,7 @@ void mvt_pft_config_default(mvt_pft_config_t *c)
     c->lost_s = MVT_R(1.0);
     c->confirm_frames = 5;
     c->tentative_lost_s = MVT_R(0.2);
+    c->recover_s = MVT_R(3.0);
     c->seed = 1u;
 }
 
@@ -69,7 +70,8 @@ mvt_err_t mvt_pft_init(mvt_pft_t *self, const mvt_pft_config_t *cfg, const mvt_c
         !(cfg->birth_xy_std_m > MVT_R(0.0)) || !in_range(cfg->dup_dist_m, MVT_R(0.0), MVT_R(10.0)) ||
         !(cfg->support_fraction > MVT_R(0.0)) || !in_range(cfg->support_fraction, MVT_R(0.0), MVT_R(1.0)) ||
         cfg->support_min_views < 1 || !(cfg->lost_s > MVT_R(0.0)) || !isfinite(cfg->lost_s) ||
-        !isfinite(cfg->birth_sep_m) || !(cfg->lik_exponent > MVT_R(0.0)) || !(cfg->lik_exponent <= MVT_R(1.0)) || !isfinite(cfg->birth_xy_std_m)) {
+        !isfinite(cfg->birth_sep_m) || !(cfg->lik_exponent > MVT_R(0.0)) || !(cfg->lik_exponent <= MVT_R(1.0)) || !isfinite(cfg->birth_xy_std_m) ||
+        !(cfg->recover_s >= MVT_R(0.0)) || !isfinite(cfg->recover_s)) {
         return MVT_ERR_INVALID;
     }
     const mvt_pf_body_t *b = &cfg->body;
@@ -116,8 +118,20 @@ static void birth(mvt_pft_t *self, mvt_pft_target_t *t, const mvt_track_out_t *s
     mvt_pf_pool_t *p = &t->pool;
     const int num_cams = self->det.num_cameras;
     memset(t, 0, sizeof(*t) - sizeof(t->pool));
-    t->id = self->next_id;
-    self->next_id = self->next_id == INT32_MAX ? 1 : self->next_id + 1;
+    t->id = 0;
+    for (int r = 0; r < MVT_MAX_TARGETS && src->id > 0; r++) { /* the same person, lost by the filter */
+        if (self->lost[r].id != 0 && self->lost[r].blob_id == src->id && self->lost[r].until_us >= now_us) {
+            t->id = self->lost[r].id;
+            t->recover_until_us = self->lost[r].until_us;
+            self->lost[r].id = 0;
+            break;
+        }
+    }
+    if (t->id == 0) {
+        t->id = self->next_id;
+        self->next_id = self->next_id == INT32_MAX ? 1 : self->next_id + 1;
+    }
+    t->blob_id = src->id;
     t->status = c->confirm_frames > 1 ? MVT_TRACK_TENTATIVE : MVT_TRACK_CONFIRMED;
     t->last_supported_us = now_us;
     p->n = c->num_particles;
@@ -218,6 +232,61 @@ static void exclusion_prior(mvt_pft_t *self, int ti)
     }
 }
 
+/* Keeps identity id, followed on blob track blob_id, for recovery until until_us (the oldest
+ * record gives way when all are in use). O(MVT_MAX_TARGETS). */
+static void keep_identity(mvt_pft_t *self, int32_t id, int32_t blob_id, int64_t until_us, int64_t now_us)
+{
+    int slot = 0;
+    for (int r = 0; r < MVT_MAX_TARGETS; r++) {
+        if (self->lost[r].id == 0 || self->lost[r].until_us < now_us) {
+            slot = r;
+            break;
+        }
+        if (self->lost[r].until_us < self->lost[slot].until_us) {
+            slot = r;
+        }
+    }
+    self->lost[slot].id = id;
+    self->lost[slot].blob_id = blob_id;
+    self->lost[slot].until_us = until_us;
+}
+
+/* A target about to be deleted: a confirmed one lost by the filter keeps its identity for
+ * recover_s; a tentative one holding a recovered identity gives it back until its deadline. */
+static void release_identity(mvt_pft_t *self, const mvt_pft_target_t *a, int64_t now_us)
+{
+    const mvt_pft_config_t *c = &self->cfg;
+    if (!(c->recover_s > MVT_R(0.0)) || a->blob_id <= 0) {
+        return;
+    }
+    if (a->status == MVT_TRACK_TENTATIVE) {
+        if (a->recover_until_us >= now_us) {
+            keep_identity(self, a->id, a->blob_id, a->recover_until_us, now_us);
+        }
+        return;
+    }
+    keep_identity(self, a->id, a->blob_id, now_us + (int64_t)(c->recover_s * MVT_R(1e6)), now_us);
+}
+
+/* Each target notes the confirmed blob track nearest to it horizontally, within birth_sep_m
+ * (identity recovery's key). O(T * blob tracks). */
+static void follow_blob_tracks(mvt_pft_t *self)
+{
+    const mvt_real sep2 = self->cfg.birth_sep_m * self->cfg.birth_sep_m;
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        mvt_pft_target_t *a = &self->targets[t];
+        mvt_real best = sep2;
+        for (int i = 0; i < self->det_out.num_tracks && a->id != 0; i++) {
+            const mvt_track_out_t *bt = &self->det_out.tracks[i];
+            const mvt_real dx = a->est.mean[0] - bt->pos_m[0], dy = a->est.mean[1] - bt->pos_m[1];
+            if (bt->status != MVT_TRACK_TENTATIVE && dx * dx + dy * dy < best) {
+                best = dx * dx + dy * dy;
+                a->blob_id = bt->id;
+            }
+        }
+    }
+}
+
 static void delete_targets(mvt_pft_t *self, int64_t now_us)
 {
     const mvt_pft_config_t *c = &self->cfg;
@@ -228,11 +297,13 @@ static void delete_targets(mvt_pft_t *self, int64_t now_us)
         }
         const mvt_real unseen_s = mvt_us_to_s(now_us - a->last_supported_us);
         if (a->status == MVT_TRACK_TENTATIVE && unseen_s > c->tentative_lost_s) {
+            release_identity(self, a, now_us);
             a->id = 0;
             self->counters.deleted_tentative++;
             continue;
         }
         if (unseen_s > c->lost_s) {
+            release_identity(self, a, now_us);
             a->id = 0;
             self->counters.deleted_lost++;
             continue;
@@ -362,6 +433,10 @@ mvt_err_t mvt_pft_step(mvt_pft_t *self, const mvt_frame_t *frame, mvt_output_t *
             a->supported_frames += a->supported_frames < c->confirm_frames;
         }
         if (a->status != MVT_TRACK_TENTATIVE || a->supported_frames >= c->confirm_frames) {
+            if (a->status == MVT_TRACK_TENTATIVE && a->recover_until_us != 0) {
+                self->counters.identities_recovered++; /* confirmed: the identity is back */
+            }
+            a->recover_until_us = 0;
             a->status = supported ? MVT_TRACK_CONFIRMED : MVT_TRACK_COASTING;
         }
         if (a->ess < c->ess_fraction * (mvt_real)a->pool.n) {
@@ -369,6 +444,7 @@ mvt_err_t mvt_pft_step(mvt_pft_t *self, const mvt_frame_t *frame, mvt_output_t *
             self->counters.resamples++;
         }
     }
+    follow_blob_tracks(self);
     delete_targets(self, frame->utime_us);
 
     /* births from confirmed blob tracks that no particle target explains */

@@ -69,6 +69,10 @@ typedef struct mvt_pft_config {
                                    >= 1; default 5 */
     mvt_real tentative_lost_s;  /* a tentative target unsupported this long is deleted, > 0;
                                    default 0.2 */
+    mvt_real recover_s;         /* identity recovery: a target deleted as lost keeps its identity this
+                                   long for a new target born from the blob track it was following
+                                   (the blob tracker kept the person; the filter lost them); >= 0,
+                                   default 3; 0: off */
     uint64_t seed;              /* random number seed; default 1 */
 } mvt_pft_config_t;
 
@@ -79,6 +83,9 @@ typedef struct mvt_pft_target {
     int32_t supported_frames;   /* since birth, saturating at confirm_frames */
     uint32_t cameras_used;      /* supporting cameras this frame */
     int64_t last_supported_us;
+    int32_t blob_id;            /* the confirmed blob track it coincides with (0: none yet) */
+    int64_t recover_until_us;   /* tentative with a recovered identity: until when it may give it
+                                   back; 0 otherwise */
     mvt_real ess;               /* effective sample size this frame, before resampling */
     mvt_pf_estimate_t est;
     mvt_pf_pool_t pool;
@@ -94,6 +101,7 @@ typedef struct mvt_pft_counters {
     uint64_t deleted_tentative;      /* never confirmed */
     uint64_t deleted_outside;
     uint64_t deleted_duplicate;
+    uint64_t identities_recovered;   /* targets confirmed with a lost target's identity */
     uint64_t resamples;
     uint64_t numeric_faults;         /* non-finite weights: reset to uniform */
 } mvt_pft_counters_t;
@@ -106,6 +114,10 @@ typedef struct mvt_pft {
     mvt_rng_t rng;
     mvt_pft_target_t targets[MVT_MAX_TARGETS];
     int32_t next_id;
+    struct {                    /* identities of targets lost recently (recover_s) */
+        int32_t id, blob_id;
+        int64_t until_us;
+    } lost[MVT_MAX_TARGETS];
     int64_t last_utime_us;
     int have_time;
     mvt_pft_counters_t counters;

@@ -418,6 +418,64 @@ static void test_pft_two_people_tracked_and_reproducible(void **state)
     assert_memory_equal(&a, &b, sizeof(a)); /* same seed, same output, bit for bit */
 }
 
+/* One person walking; their masks go blank for frames 60..99 (the filter loses them) while the
+ * detector's blobs continue (the blob tracker keeps them). Returns the identity reported at frame
+ * 59 and at the last frame. */
+static void run_lost_person(mvt_real recover_s, int32_t *before, int32_t *after)
+{
+    mvt_pft_config_t cfg;
+    mvt_pft_config_default(&cfg);
+    cfg.num_particles = 300;
+    cfg.recover_s = recover_s;
+    for (int i = 0; i < 3; i++) cfg.det.volume_min[i] = 0;
+    cfg.det.volume_max[0] = 6; cfg.det.volume_max[1] = 5; cfg.det.volume_max[2] = 2.5;
+    assert_int_equal(mvt_pft_init(&g_pft, &cfg, g_cams, 5), MVT_OK);
+    *before = *after = 0;
+    for (int f = 0; f < 150; f++) {
+        const double head[3] = {2.0 + 0.015 * f, 2.4, 1.75};
+        g_frame.utime_us = 1000000 + (int64_t)f * 40000;
+        for (int k = 0; k < 5; k++) {
+            mvt_mask_t *m = &g_masks[k];
+            m->width = 192; m->height = 144; m->scale = 4; m->has_colour = 1;
+            memset(m->fg, 0, 192 * 144);
+            memset(m->hue, 30, 192 * 144);
+            memset(m->sat, 20, 192 * 144);
+            mvt_view_t *v = &g_frame.views[k];
+            v->observed = 1;
+            v->utime_us = g_frame.utime_us;
+            v->num_detections = 0;
+            v->mask = m;
+            if (f < 60 || f >= 100) paint(k, head, 40);
+            const mvt_real hp[3] = {(mvt_real)head[0], (mvt_real)head[1], (mvt_real)head[2]};
+            mvt_real uv[2];
+            if (mvt_cam_project(&g_cams[k], hp, uv, NULL) == MVT_OK) {
+                mvt_detection_t *d = &v->det[v->num_detections++];
+                memset(d, 0, sizeof(*d));
+                d->u = uv[0]; d->v = uv[1]; d->sigma_px = 3; d->score = 1; d->hue = d->saturation = -1;
+            }
+        }
+        assert_int_equal(mvt_pft_step(&g_pft, &g_frame, &g_out), MVT_OK);
+        if (f == 59 || f == 149) {
+            assert_int_equal(g_out.num_tracks, 1);
+            *(f == 59 ? before : after) = g_out.tracks[0].id;
+        }
+    }
+}
+
+static void test_pft_lost_person_recovers_identity_from_blob_track(void **state)
+{
+    (void)state;
+    int32_t before, after;
+    run_lost_person(MVT_R(3.0), &before, &after);
+    assert_true(g_pft.counters.deleted_lost >= 1); /* the filter did lose them ... */
+    assert_int_equal(g_pft.counters.identities_recovered, 1);
+    assert_int_equal(after, before);                /* ... and the same person keeps one identity */
+    run_lost_person(MVT_R(0.0), &before, &after);  /* without recovery: a new identity */
+    assert_true(g_pft.counters.deleted_lost >= 1);
+    assert_int_equal(g_pft.counters.identities_recovered, 0);
+    assert_true(after != before && after > 0);
+}
+
 static void test_pft_time_backwards_refused(void **state)
 {
     (void)state;
@@ -440,6 +498,9 @@ static void test_pft_config_invalid_rejected(void **state)
     mvt_pft_config_default(&cfg);
     cfg.noise.z_renew = NAN;
     assert_int_equal(mvt_pft_init(&g_pft, &cfg, g_cams, 5), MVT_ERR_INVALID);
+    mvt_pft_config_default(&cfg);
+    cfg.recover_s = -1.0f;
+    assert_int_equal(mvt_pft_init(&g_pft, &cfg, g_cams, 5), MVT_ERR_INVALID);
 }
 
 int main(void)
@@ -453,6 +514,7 @@ int main(void)
         cmocka_unit_test(test_estimate_box_is_heaviest_set),
         cmocka_unit_test(test_weight_point_and_column_match_projection),
         cmocka_unit_test(test_pft_two_people_tracked_and_reproducible),
+        cmocka_unit_test(test_pft_lost_person_recovers_identity_from_blob_track),
         cmocka_unit_test(test_pft_time_backwards_refused),
         cmocka_unit_test(test_pft_config_invalid_rejected),
     };
