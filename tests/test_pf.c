@@ -326,6 +326,22 @@ static void paint(int k, const double head[3], uint8_t hue)
             }
 }
 
+/* Camera k's view of g_frame: an empty 192 x 144 mask with background colour, no detections. */
+static mvt_view_t *empty_view(int k)
+{
+    mvt_mask_t *m = &g_masks[k];
+    m->width = 192; m->height = 144; m->scale = 4; m->has_colour = 1;
+    memset(m->fg, 0, 192 * 144);
+    memset(m->hue, 30, 192 * 144);
+    memset(m->sat, 20, 192 * 144);
+    mvt_view_t *v = &g_frame.views[k];
+    v->observed = 1;
+    v->utime_us = g_frame.utime_us;
+    v->num_detections = 0;
+    v->mask = m;
+    return v;
+}
+
 /* Two people walking parallel 0.9 m apart; returns the worst horizontal error over the last 50
  * frames; *head_out counts frames x people whose true head lies inside the reported volume. */
 static double run_two(uint64_t seed, int frames, int column, mvt_output_t *last, int *head_in)
@@ -344,16 +360,7 @@ static double run_two(uint64_t seed, int frames, int column, mvt_output_t *last,
         const double heads[2][3] = {{2.0 + 0.02 * f, 2.1, 1.70}, {2.0 + 0.02 * f, 3.0, 1.80}};
         g_frame.utime_us = 1000000 + (int64_t)f * 40000;
         for (int k = 0; k < 5; k++) {
-            mvt_mask_t *m = &g_masks[k];
-            m->width = 192; m->height = 144; m->scale = 4; m->has_colour = 1;
-            memset(m->fg, 0, 192 * 144);
-            memset(m->hue, 30, 192 * 144);
-            memset(m->sat, 20, 192 * 144);
-            mvt_view_t *v = &g_frame.views[k];
-            v->observed = 1;
-            v->utime_us = g_frame.utime_us;
-            v->num_detections = 0;
-            v->mask = m;
+            mvt_view_t *v = empty_view(k);
             for (int p = 0; p < 2; p++) {
                 paint(k, heads[p], (uint8_t)(90 * p + 10));
                 const mvt_real hp[3] = {(mvt_real)heads[p][0], (mvt_real)heads[p][1], (mvt_real)heads[p][2]};
@@ -435,16 +442,7 @@ static void run_lost_person(mvt_real recover_s, int32_t *before, int32_t *after)
         const double head[3] = {2.0 + 0.015 * f, 2.4, 1.75};
         g_frame.utime_us = 1000000 + (int64_t)f * 40000;
         for (int k = 0; k < 5; k++) {
-            mvt_mask_t *m = &g_masks[k];
-            m->width = 192; m->height = 144; m->scale = 4; m->has_colour = 1;
-            memset(m->fg, 0, 192 * 144);
-            memset(m->hue, 30, 192 * 144);
-            memset(m->sat, 20, 192 * 144);
-            mvt_view_t *v = &g_frame.views[k];
-            v->observed = 1;
-            v->utime_us = g_frame.utime_us;
-            v->num_detections = 0;
-            v->mask = m;
+            mvt_view_t *v = empty_view(k);
             if (f < 60 || f >= 100) paint(k, head, 40);
             const mvt_real hp[3] = {(mvt_real)head[0], (mvt_real)head[1], (mvt_real)head[2]};
             mvt_real uv[2];
