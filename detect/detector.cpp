@@ -330,7 +330,7 @@ void Detector::process(const cv::Mat &bgr, Result &out)
     out.warming_up = false;
     out.gain = 1.0f;
     if (cfg_.gain_compensation) { /* the background's brightness now against its reference */
-        const cv::Scalar m = prev_fg_.empty() ? cv::mean(small_) : cv::mean(small_, prev_fg_ == 0);
+        const cv::Scalar m = prev_bg_.empty() ? cv::mean(small_) : cv::mean(small_, prev_bg_);
         const double now = (m[0] + m[1] + m[2]) / 3.0;
         if (ref_brightness_ < 0.0) {
             ref_brightness_ = now;
@@ -369,7 +369,7 @@ void Detector::process(const cv::Mat &bgr, Result &out)
     cv::threshold(fg_raw_, fg_, 200, 255, cv::THRESH_BINARY); /* shadows are 127 */
     cv::morphologyEx(fg_, tmp_, cv::MORPH_OPEN, open_kernel_);
     cv::morphologyEx(tmp_, fg_, cv::MORPH_CLOSE, close_kernel_);
-    prev_fg_ = fg_.clone();
+    cv::compare(fg_, 0, prev_bg_, cv::CMP_EQ); /* this frame's background, for the next gain */
 
     fill_masks(out);
 

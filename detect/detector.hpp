@@ -135,7 +135,7 @@ class Detector {
     std::vector<cv::Mat> boot_;      /* the first frames, for the median background */
     int history_frames_ = 1, bootstrap_frames_ = 0;
     double ref_brightness_ = -1.0;   /* mean background brightness the frames are scaled to */
-    cv::Mat prev_fg_;                /* last frame's foreground (its complement measures the gain) */
+    cv::Mat prev_bg_;                /* last frame's background pixels (where the gain is measured) */
 };
 
 } // namespace mvdet
