@@ -41,6 +41,10 @@ typedef struct mvt_camera {
     mvt_real centre[3];             /* camera centre in the world, -R^T t, metres */
     int width, height;
     mvt_real sigma_px;
+    mvt_real field_r2;              /* the model's field: normalised x^2 + y^2 up to where the radial
+                                       map r -> r radial(r^2) stops increasing (a lens with k1 < 0
+                                       folds farther points back into the image); 1e30 when it
+                                       never folds within r = 20 (87 degrees off axis) */
 } mvt_camera_t;
 
 /* Checks the parameters (finite, fx, fy > 0, sizes > 0, sigma > 0, K's last row 0 0 1) and
@@ -76,7 +80,9 @@ static inline void mvt_cam_distort_value(const mvt_camera_t *cam, mvt_real x, mv
 mvt_real mvt_cam_depth(const mvt_camera_t *cam, const mvt_real xw[3]);
 
 /* Projects a world point to raw (distorted) pixels; jac (2x3 row-major, d(u,v)/d(X,Y,Z)) may be
- * NULL. MVT_ERR_BEHIND when the depth is below 1 mm. O(1). */
+ * NULL. MVT_ERR_BEHIND when the point is not in the camera's field: depth below 1 mm, or beyond
+ * the radius where the distortion folds back (field_r2; such a point has no image, although the
+ * polynomial would put it inside the picture). O(1). */
 mvt_err_t mvt_cam_project(const mvt_camera_t *cam, const mvt_real xw[3], mvt_real uv[2],
                           mvt_real jac[6]);
 
@@ -86,7 +92,7 @@ void mvt_cam_distort(const mvt_camera_t *cam, const mvt_real xn[2], mvt_real xd[
 
 /* Raw pixels -> undistorted normalised coordinates (x = X/Z, y = Y/Z), by Newton iteration on
  * the distortion model (at most 20 iterations, each O(1)). MVT_ERR_NUMERIC when it does not
- * converge (a pixel outside the model's invertible region). */
+ * converge or lands beyond the fold (a pixel outside the model's invertible region). */
 mvt_err_t mvt_cam_undistort(const mvt_camera_t *cam, const mvt_real uv[2], mvt_real xn[2]);
 
 /* Normalised -> ideal (pinhole) pixels with the camera's K. */

@@ -245,7 +245,8 @@ static inline int view_index(const mvt_camera_t *c, const mvt_pf_fov_t *f, const
     }
     const mvt_real iz = MVT_R(1.0) / Z;
     const mvt_real xn = X * iz, yn = Y * iz;
-    if (!(xn >= f->x_min && xn <= f->x_max && yn >= f->y_min && yn <= f->y_max)) {
+    if (!(xn >= f->x_min && xn <= f->x_max && yn >= f->y_min && yn <= f->y_max) ||
+        !(xn * xn + yn * yn <= c->field_r2)) {
         return -1;
     }
     mvt_real xd[2];

@@ -12,7 +12,7 @@ typedef enum mvt_err {
     MVT_OK = 0,
     MVT_ERR_INVALID = -1,     /* argument out of range (count, size, non-finite parameter) */
     MVT_ERR_NUMERIC = -2,     /* matrix not positive definite / singular */
-    MVT_ERR_BEHIND = -3,      /* point at or behind the camera */
+    MVT_ERR_BEHIND = -3,      /* point at or behind the camera, or beyond its lens model's field */
     MVT_ERR_FULL = -4,        /* a fixed-capacity pool is full */
     MVT_ERR_NONFINITE = -5,   /* NaN or infinity in the input */
     MVT_ERR_GATED = -6,       /* measurement outside the validation gate */

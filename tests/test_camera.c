@@ -55,6 +55,42 @@ static void test_mvt_cam_project_target_lands_on_principal_point(void **state)
     assert_int_equal(mvt_cam_project(&c, b, uv, NULL), MVT_ERR_BEHIND);
 }
 
+/* k1 < 0: g(r) = r (1 + k1 r^2) peaks at r_f = 1 / sqrt(-3 k1) and maps farther points back into
+ * the picture. Beyond r_f the model has no image: project refuses, undistort never lands there. */
+static void test_mvt_cam_field_ends_where_the_distortion_folds(void **state)
+{
+    (void)state;
+    mvt_camera_params_t p;
+    const double pos[3] = {0, 0, 2}, tgt[3] = {3, 0, 2};
+    const double d[5] = {-0.3, 0, 0, 0, 0};
+    test_look_at(&p, pos, tgt, 400, 400, 300, d);
+    p.width = 800;
+    p.height = 600;
+    mvt_camera_t c;
+    assert_int_equal(mvt_cam_init(&c, &p), MVT_OK);
+    const double rf = 1.0 / sqrt(0.9);
+    assert_true((double)c.field_r2 <= (rf + 1.0 / 256) * (rf + 1.0 / 256));
+    assert_true((double)c.field_r2 >= (rf - 2.0 / 256) * (rf - 2.0 / 256));
+    /* camera looks along +x; normalised x = lateral offset / depth (3 m ahead) */
+    mvt_real uv[2], jac[6];
+    const mvt_real inside[3] = {3, (mvt_real)-0.9 * 3, 2}; /* r = 0.9 */
+    assert_int_equal(mvt_cam_project(&c, inside, uv, jac), MVT_OK);
+    const mvt_real folded[3] = {3, (mvt_real)-1.5 * 3, 2}; /* r = 1.5: the polynomial gives 0.4875 */
+    assert_int_equal(mvt_cam_project(&c, folded, uv, jac), MVT_ERR_BEHIND);
+    /* the pixel where the polynomial would put it undistorts to the in-field point (r = 0.5329) */
+    const mvt_real px[2] = {(mvt_real)(400 + 400 * 0.4875), 300};
+    mvt_real xn[2];
+    assert_int_equal(mvt_cam_undistort(&c, px, xn), MVT_OK);
+    assert_true(fabs(sqrt((double)(xn[0] * xn[0] + xn[1] * xn[1])) - 0.5329) < 2e-3);
+    /* a pixel beyond the largest distorted radius g(r_f) = 0.7027 has no preimage */
+    const mvt_real far[2] = {(mvt_real)(400 + 400 * 0.75), 300};
+    assert_int_equal(mvt_cam_undistort(&c, far, xn), MVT_ERR_NUMERIC);
+    /* no distortion: no fold */
+    test_look_at(&p, pos, tgt, 400, 400, 300, NULL);
+    assert_int_equal(mvt_cam_init(&c, &p), MVT_OK);
+    assert_true(c.field_r2 > (mvt_real)1e20);
+}
+
 static void test_mvt_cam_project_jacobian_matches_finite_differences(void **state)
 {
     (void)state;
@@ -150,6 +186,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_mvt_cam_init_bad_params_rejected),
         cmocka_unit_test(test_mvt_cam_project_target_lands_on_principal_point),
+        cmocka_unit_test(test_mvt_cam_field_ends_where_the_distortion_folds),
         cmocka_unit_test(test_mvt_cam_project_jacobian_matches_finite_differences),
         cmocka_unit_test(test_mvt_cam_undistort_round_trip_recovers_normalised_point),
         cmocka_unit_test(test_mvt_cam_ray_passes_through_projected_point),

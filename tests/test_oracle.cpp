@@ -80,6 +80,32 @@ static void cv_project(const OracleCam &o, const Eigen::Vector3d &X, Eigen::Vect
     }
 }
 
+/* The radius (normalised) where OpenCV's radial map r (1 + k1 r^2 + k2 r^4 + k3 r^6) / (1 + k4 r^2
+ * + k5 r^4 + k6 r^6) has its first maximum: beyond it projectPoints folds points back into the
+ * picture. Found here by the derivative's sign change and bisection, in double. */
+static double fold_radius(const OracleCam &o)
+{
+    const double *d = o.D.ptr<double>();
+    auto g = [d](double r) {
+        const double r2 = r * r;
+        return r * (1 + r2 * (d[0] + r2 * (d[1] + r2 * d[4]))) / (1 + r2 * (d[5] + r2 * (d[6] + r2 * d[7])));
+    };
+    auto dg = [&g](double r) { return (g(r + 1e-7) - g(r - 1e-7)) / 2e-7; };
+    double lo = 1e-3;
+    for (double r = 1e-3; r < 20; r += 1e-3) {
+        if (!(dg(r) > 0)) {
+            double hi = r;
+            for (int i = 0; i < 60; i++) {
+                const double m = 0.5 * (lo + hi);
+                (dg(m) > 0 ? lo : hi) = m;
+            }
+            return lo;
+        }
+        lo = r;
+    }
+    return 1e15;
+}
+
 static Eigen::Vector2d cv_undistort_ideal(const OracleCam &o, const Eigen::Vector2d &uv)
 {
     std::vector<cv::Point2d> in{cv::Point2d(uv(0), uv(1))}, out;
@@ -110,6 +136,8 @@ static std::vector<mvt_camera_params_t> random_params(std::mt19937 &g, int n, bo
     return ps;
 }
 
+static int g_folded;
+
 static void test_mvt_cam_project_matches_opencv(void **state)
 {
     (void)state;
@@ -123,6 +151,7 @@ static void test_mvt_cam_project_matches_opencv(void **state)
             for (int i = 0; i < 9; i++) { /* Rodrigues */
                 assert_true(std::fabs((double)cam.R[i] - o.R(i / 3, i % 3)) < (MVT_USE_DOUBLE ? 1e-12 : 1e-6));
             }
+            const double rf = fold_radius(o);
             for (int t = 0; t < 50; t++) {
                 const Eigen::Vector3d X(0.5 + 5 * U(g), 0.5 + 4 * U(g), 0.2 + 1.8 * U(g));
                 Eigen::Vector2d uv;
@@ -131,6 +160,14 @@ static void test_mvt_cam_project_matches_opencv(void **state)
                 if (uv(0) < 0 || uv(0) > 767 || uv(1) < 0 || uv(1) > 575) continue;
                 const mvt_real x[3] = {(mvt_real)X(0), (mvt_real)X(1), (mvt_real)X(2)};
                 mvt_real m[2], mj[6];
+                const Eigen::Vector3d Xc = o.R * X + Eigen::Vector3d(o.tvec.ptr<double>());
+                const double r = std::hypot(Xc(0) / Xc(2), Xc(1) / Xc(2));
+                if (r > rf + 0.01) { /* OpenCV folded it into the picture; the core has no image of it */
+                    assert_int_equal(mvt_cam_project(&cam, x, m, mj), MVT_ERR_BEHIND);
+                    g_folded++;
+                    continue;
+                }
+                if (r > rf - 0.01) continue; /* the scan's step */
                 assert_int_equal(mvt_cam_project(&cam, x, m, mj), MVT_OK);
                 assert_true(std::fabs(m[0] - uv(0)) < PX_TOL * 10 && std::fabs(m[1] - uv(1)) < PX_TOL * 10);
                 for (int i = 0; i < 6; i++) {
@@ -147,6 +184,7 @@ static void test_mvt_cam_project_matches_opencv(void **state)
             }
         }
     }
+    print_message("# %d in-picture OpenCV projections lay beyond the fold and were refused\n", g_folded);
 }
 
 /* The oracle filter: the paper's 8x8 form in Eigen double. */

@@ -1,6 +1,7 @@
 """Tests of the Python tools against independent references (OpenCV, FilterPy, numpy)."""
 from __future__ import annotations
 
+import cv2
 import numpy as np
 import pytest
 from filterpy.kalman import KalmanFilter
@@ -126,3 +127,34 @@ def test_random_rig_sees_room_centre_from_every_camera():
         centre[2] = 1.7
         for cam in rig.cameras:
             assert cam.in_image(cam.project(centre))[0]
+
+
+def test_camera_field_ends_at_the_distortion_fold():
+    """k1 < 0: r (1 + k1 r^2) peaks at r_f = 1 / sqrt(-3 k1). cv2.projectPoints folds a point at
+    r = 1.5 back into the picture; Camera.project gives NaN there (the core refuses it too:
+    tests/test_camera.c)."""
+    from mvtrack_tools.rig import intrinsics, look_at
+    cam = look_at("fold", [0, 0, 2], [3, 0, 2], intrinsics(400, 400, 400, 300), [-0.3, 0, 0, 0, 0], 800, 600)
+    rf = 1 / np.sqrt(0.9)
+    assert (rf - 1 / 256) ** 2 <= cam.field_r2 <= (rf + 1 / 256) ** 2
+    inside, folded = np.array([3.0, -0.9 * 3, 2.0]), np.array([3.0, -1.5 * 3, 2.0])
+    assert np.all(np.isfinite(cam.project(inside)))
+    assert np.all(np.isnan(cam.project(folded)))
+    raw, _ = cv2.projectPoints(folded.reshape(1, 1, 3), cam.rvec, cam.tvec, cam.K, cam.dist)
+    assert cam.in_image(raw.reshape(1, 2))[0]  # where the polynomial alone would put it
+    assert np.isinf(look_at("pin", [0, 0, 2], [3, 0, 2], intrinsics(400, 400, 400, 300), [0] * 5).field_r2)
+
+
+def test_random_rig_lenses_do_not_fold_inside_the_picture():
+    """Every random camera's model still rises beyond its image corners (a calibration's validity):
+    undistorting a corner and projecting it back lands on the corner."""
+    for seed in range(1, 30):
+        for cam in random_rig(np.random.default_rng(seed), 5).cameras:
+            corners = np.array([[0, 0], [cam.width - 1, 0], [0, cam.height - 1], [cam.width - 1, cam.height - 1]],
+                               np.float64)
+            xn = cv2.undistortPointsIter(corners.reshape(-1, 1, 2), cam.K, cam.dist, None, None,
+                                         (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-12))
+            xn = xn.reshape(-1, 2)
+            assert np.all(np.sum(xn ** 2, axis=1) < cam.field_r2)
+            X = cam.centre + (np.c_[xn, np.ones(4)] @ cam.R) * 2.0
+            np.testing.assert_allclose(cam.project(X), corners, atol=0.05)

@@ -243,6 +243,9 @@ def _blob(cam, head: np.ndarray) -> tuple[float, float, float, float] | None:
     if np.any(cam.depth(pts) <= 0.1):
         return None
     uv = cam.project(pts)
+    uv = uv[np.all(np.isfinite(uv), axis=1)]  # points outside the camera's field have no image
+    if not len(uv):
+        return None
     return float(uv[:, 0].min()), float(uv[:, 1].min()), float(uv[:, 0].max()), float(uv[:, 1].max())
 
 

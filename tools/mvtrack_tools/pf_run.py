@@ -184,6 +184,8 @@ def plot_views(path: Path, rig, scene, trk: Path, seed: int) -> None:
             if np.any(cam.depth(corners) <= 0.1):
                 continue
             uv = cam.project(corners).astype(np.float32)
+            if not np.all(np.isfinite(uv)):
+                continue
             hull = cv2.convexHull(uv).reshape(-1, 2)
             ax.fill(hull[:, 0], hull[:, 1], fill=False, ec=f"C{i}", lw=1.5)
             head = cam.project(np.asarray(t.position)[None])[0]

@@ -19,6 +19,7 @@ reused when present (--fresh renders again).
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
 import shlex
 import sys
@@ -60,10 +61,17 @@ def prepare(out: Path, rig_seed: int, cameras: int, kind: str, seed: int, second
     d = out / "video" / f"rig{rig_seed}_{kind}_{seed}"
     stamp = d / "done.json"
     rig_path, truth = d / "rig.yaml", d / "truth.lcm"
-    if stamp.exists() and not fresh:
-        return rig, rig_path, truth, json.loads(stamp.read_text())
     d.mkdir(parents=True, exist_ok=True)
-    rig.write(rig_path)
+    probe = d / "rig.new.yaml"
+    rig.write(probe)
+    rig_sha = hashlib.sha1(probe.read_bytes()).hexdigest()
+    if stamp.exists() and not fresh:
+        info = json.loads(stamp.read_text())
+        old = info.get("rig_sha") or (rig_path.exists() and hashlib.sha1(rig_path.read_bytes()).hexdigest())
+        if old == rig_sha:  # videos of another rig (the generator changed) are not reused
+            probe.unlink()
+            return rig, rig_path, truth, info
+    probe.replace(rig_path)
     scene = scene_for(kind, rig, seed, seconds)
     w = LogWriter(str(truth))
     write_truth(w, scene)
@@ -72,7 +80,8 @@ def prepare(out: Path, rig_seed: int, cameras: int, kind: str, seed: int, second
     res = write_video(d, scene, seed, jobs=jobs, progress=progress)
     info = {"people": len(scene.people), "frames": scene.n_frames, "lead_in_frames": res[0]["lead_in_frames"],
             "render_s": round(time.perf_counter() - t0, 1),
-            "render_ms_per_frame": round(float(np.mean([r["render_ms_per_frame"] for r in res])), 1)}
+            "render_ms_per_frame": round(float(np.mean([r["render_ms_per_frame"] for r in res])), 1),
+            "rig_sha": rig_sha}
     stamp.write_text(json.dumps(info))
     return rig, rig_path, truth, info
 

@@ -35,12 +35,39 @@ class Camera:
         X = np.atleast_2d(X)
         return (X @ self.R.T + self.tvec)[:, 2]
 
+    @property
+    def field_r2(self) -> float:
+        """The lens model's field: normalised x^2 + y^2 up to the first maximum of the radial map
+        r (1 + k1 r^2 + k2 r^4 + k3 r^6) / (1 + k4 r^2 + ...). Beyond it the polynomial folds points
+        back into the picture; a real lens shows nothing of them. inf when it never folds (r <= 20).
+        The core computes the same (mvt_camera.c); both are checked against the analytic fold of a k1-only
+        lens (tests/test_camera.c, tests/python/test_tools.py)."""
+        d = np.zeros(8)
+        d[:len(self.dist)] = np.asarray(self.dist, float).ravel()[:8]
+        r = np.arange(1, 20 * 256 + 1) / 256.0
+        r2 = r * r
+        g = r * (1 + r2 * (d[0] + r2 * (d[1] + r2 * d[4]))) / (1 + r2 * (d[5] + r2 * (d[6] + r2 * d[7])))
+        bad = np.flatnonzero(~(np.diff(np.concatenate([[0.0], g])) > 0))
+        return float((r[bad[0]] - 1 / 256.0) ** 2) if len(bad) else float("inf")
+
+    def in_field(self, X: np.ndarray) -> np.ndarray:
+        """World points (N,3) the camera can image: in front, within the lens model's field."""
+        X = np.atleast_2d(np.asarray(X, dtype=np.float64))
+        xc = X @ self.R.T + self.tvec
+        with np.errstate(divide="ignore", invalid="ignore"):
+            r2 = (xc[:, 0] ** 2 + xc[:, 1] ** 2) / xc[:, 2] ** 2
+        return (xc[:, 2] > 1e-3) & (r2 <= self.field_r2)
+
     def project(self, X: np.ndarray) -> np.ndarray:
-        """World points (N,3) -> raw distorted pixels (N,2)."""
+        """World points (N,3) -> raw distorted pixels (N,2); NaN for points outside the camera's
+        field (behind it, or beyond the distortion's fold, where cv2.projectPoints would fold them
+        back into the picture)."""
         X = np.atleast_2d(np.asarray(X, dtype=np.float64))
         uv, _ = cv2.projectPoints(X.reshape(-1, 1, 3), self.rvec.reshape(3, 1), self.tvec.reshape(3, 1), self.K,
                                   self.dist)
-        return uv.reshape(-1, 2)
+        uv = uv.reshape(-1, 2)
+        uv[~self.in_field(X)] = np.nan
+        return uv
 
     def project_jacobian(self, X: np.ndarray) -> np.ndarray:
         """d(u, v)/d(X, Y, Z) of one world point (2x3), from cv2.projectPoints' own Jacobian."""
@@ -158,6 +185,22 @@ def smartroom(sigma_px: float = 2.0) -> Rig:
     return Rig(cams, np.array([0.0, 0.0, 0.0]), np.array([L, W, 2.5]), 25.0)
 
 
+def _lens_covers_image(cam: Camera, margin: float) -> bool:
+    """The largest distorted radius the model reaches (at its fold) exceeds margin x the farthest
+    image corner's distorted normalised radius."""
+    corners = np.array([[0, 0], [cam.width - 1, 0], [0, cam.height - 1], [cam.width - 1, cam.height - 1]], float)
+    xd = (corners[:, 0] - cam.K[0, 2]) / cam.K[0, 0]
+    yd = (corners[:, 1] - cam.K[1, 2]) / cam.K[1, 1]
+    rd = float(np.max(np.hypot(xd, yd)))
+    r2 = cam.field_r2
+    if not np.isfinite(r2):
+        return True
+    d = np.zeros(8)
+    d[:len(cam.dist)] = np.asarray(cam.dist, float).ravel()[:8]
+    g = np.sqrt(r2) * (1 + r2 * (d[0] + r2 * (d[1] + r2 * d[4]))) / (1 + r2 * (d[5] + r2 * (d[6] + r2 * d[7])))
+    return g > margin * rd
+
+
 def random_rig(rng: np.random.Generator, n_cameras: int, room=(7.0, 6.0, 3.0), width: int | None = None,
                height: int | None = None) -> Rig:
     """A rig built differently from smartroom(): random room size, positions on the walls, random
@@ -178,6 +221,12 @@ def random_rig(rng: np.random.Generator, n_cameras: int, room=(7.0, 6.0, 3.0), w
                        h / 2 + rng.uniform(-0.06, 0.06) * h)
         k1 = rng.uniform(-0.3, 0.1)
         dist = [k1, rng.uniform(-0.02, 0.08), rng.uniform(-1e-3, 1e-3), rng.uniform(-1e-3, 1e-3), rng.uniform(-0.01, 0.005)]
-        cams.append(look_at(f"c{k}_{rng.integers(1000)}", pos, tgt, K, dist, w, h, sigma_px=2.0,
-                            roll_deg=rng.uniform(-8, 8)))
+        cam = look_at(f"c{k}_{rng.integers(1000)}", pos, tgt, K, dist, w, h, sigma_px=2.0,
+                      roll_deg=rng.uniform(-8, 8))
+        # A calibration is valid over the picture it was made from: the radial map must still rise
+        # 10 % beyond the image corners. A draw that folds inside is flattened (no extra random draws,
+        # so rigs whose lenses were valid stay as they were).
+        while not _lens_covers_image(cam, 1.1):
+            cam.dist[[0, 1, 4]] *= 0.8
+        cams.append(cam)
     return Rig(cams, np.array([0.0, 0.0, 0.0]), np.array([L, W, 2.5]), 25.0)

@@ -270,6 +270,8 @@ class RoomView:
         if np.any(cam.depth(pts) <= 0.05):
             return None
         uv = cam.project(pts)
+        if not np.all(np.isfinite(uv)):  # partly beyond the lens model's field: cast the whole image
+            return 0, 0, cam.width, cam.height
         x0, y0 = np.floor(uv.min(0)).astype(int) - 6
         x1, y1 = np.ceil(uv.max(0)).astype(int) + 6
         x0, y0 = max(x0, 0), max(y0, 0)
