@@ -226,8 +226,23 @@ mvt_err_t mvt_cv_truncate(mvt_cv_state_t *s, const mvt_real H[3], mvt_real value
     return mvt_cv_truncate_ex(s, H, value, MVT_R(0.0), lo, hi, mass);
 }
 
+static mvt_err_t truncate(mvt_cv_state_t *s, const mvt_real H[3], mvt_real value, mvt_real extra_var, mvt_real lo,
+                          mvt_real hi, int keep_height, mvt_real *mass);
+
 mvt_err_t mvt_cv_truncate_ex(mvt_cv_state_t *s, const mvt_real H[3], mvt_real value, mvt_real extra_var, mvt_real lo,
                              mvt_real hi, mvt_real *mass)
+{
+    return truncate(s, H, value, extra_var, lo, hi, 0, mass);
+}
+
+mvt_err_t mvt_cv_truncate_ground(mvt_cv_state_t *s, const mvt_real H[3], mvt_real value, mvt_real extra_var,
+                                 mvt_real lo, mvt_real hi, mvt_real *mass)
+{
+    return truncate(s, H, value, extra_var, lo, hi, 1, mass);
+}
+
+static mvt_err_t truncate(mvt_cv_state_t *s, const mvt_real H[3], mvt_real value, mvt_real extra_var, mvt_real lo,
+                          mvt_real hi, int keep_height, mvt_real *mass)
 {
     if (mass != NULL) {
         *mass = MVT_R(0.0);
@@ -263,9 +278,9 @@ mvt_err_t mvt_cv_truncate_ex(mvt_cv_state_t *s, const mvt_real H[3], mvt_real va
     const mvt_real S = s2 / gain;
     const mvt_real y = sd * m / gain;
     for (int i = 0; i < 6; i++) {
-        k[i] = hpP[i] / S;
+        k[i] = keep_height && (i == 2 || i == 5) ? MVT_R(0.0) : hpP[i] / S;
         s->x[i] += k[i] * y;
     }
-    mvt_cv_joseph_hp(s, 1, hpP, &S, k);
+    mvt_cv_joseph_hp(s, 1, hpP, &S, k); /* Joseph form: right for any gain, the zeroed rows too */
     return MVT_OK;
 }

@@ -55,6 +55,7 @@ void mvt_tracker_config_default(mvt_tracker_config_t *c)
     c->exclusion_m = MVT_R(0.4);
     c->contra_views = 2;
     c->contra_max_s = MVT_R(0.5);
+    c->p_detect = MVT_R(0.9);
 }
 
 static int config_ok(const mvt_tracker_config_t *c)
@@ -80,6 +81,7 @@ static int config_ok(const mvt_tracker_config_t *c)
            isfinite(c->body_halfwidth_m) && c->occluded_max_s > MVT_R(0.0) && isfinite(c->occluded_max_s) &&
            c->exclusion_m >= MVT_R(0.0) && isfinite(c->exclusion_m) &&
            c->contra_views >= 1 && c->contra_max_s > MVT_R(0.0) && isfinite(c->contra_max_s) &&
+           c->p_detect > MVT_R(0.0) && c->p_detect < MVT_R(1.0) &&
            (c->merge == MVT_MERGE_NEITHER || c->merge == MVT_MERGE_SHARE || c->merge == MVT_MERGE_OFF ||
             c->merge == MVT_MERGE_TOP) &&
            (c->filter == MVT_FILTER_PROJECTIVE || c->filter == MVT_FILTER_TRIANGULATE) &&
@@ -287,6 +289,7 @@ mvt_err_t mvt_tracker_step(mvt_tracker_t *self, const mvt_frame_t *frame, mvt_ou
     self->last_utime_us = frame->utime_us;
     self->counters.frames++;
     prepare_measurements(self, frame);
+    mvt_trk_evidence_weights(self, frame);
 
     /* observed cameras in capture-time order (insertion sort, stable, <= MVT_MAX_CAMERAS) */
     int order[MVT_MAX_CAMERAS];

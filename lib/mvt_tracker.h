@@ -123,6 +123,17 @@ typedef struct mvt_tracker_config {
                                    track seen in fewer than seen_min_views cameras this frame is kept
                                    this far from every track seen in more (mvt_cv_truncate along
                                    their horizontal separation); >= 0 (0: off), default 0.4 */
+    mvt_real p_detect;          /* probability that a camera whose picture holds a person's head
+                                   (not hidden) reports it: a detection within the birth radius,
+                                   inside a blob's box; (0, 1), default 0.9. It weighs births and
+                                   ghosts against clutter measured per camera and frame
+                                   (mvt_trk_evidence_weights): of a candidate, the two views that
+                                   form it prove nothing (any two rays that meet make one); every
+                                   further view that detects it multiplies its odds by
+                                   p_detect / q_match, every view that shows its place empty by
+                                   (1 - p_detect) / (1 - q_empty); it is born when the product is
+                                   >= 1. A confirmed or tentative track is refuted in a frame the
+                                   same way (views with boxes only) */
 } mvt_tracker_config_t;
 
 /* One detection as the core needs it (raw distorted pixels). */
@@ -179,6 +190,8 @@ typedef struct mvt_counters {
     uint64_t updates;                 /* camera updates applied */
     uint64_t gated_out;               /* track-camera pairs whose best detection failed the gate */
     uint64_t behind_camera;           /* track-camera pairs skipped: point behind the camera */
+    uint64_t outside_picture;         /* track-camera pairs skipped: predicted image point more than
+                                         3 sigma outside the picture, or a spread wider than it */
     uint64_t numeric_faults;          /* covariance repaired or track dropped as non-PD */
     uint64_t births;
     uint64_t births_refused_full;     /* MVT_MAX_TARGETS reached */
@@ -201,6 +214,8 @@ typedef struct mvt_counters {
     uint64_t occluded_updates;        /* track-camera pairs explained as hidden in another track's
                                          blob and constrained to its box (occlusion) */
     uint64_t exclusion_updates;       /* poorly seen tracks pushed out to exclusion_m from a seen one */
+    uint64_t births_refuted;          /* birth candidates refused: views that should see them show
+                                         their place empty (p_detect) */
 } mvt_counters_t;
 
 typedef struct mvt_track {
@@ -228,6 +243,7 @@ typedef struct mvt_track {
 
 typedef struct mvt_birth_cand {
     int16_t n;                          /* views */
+    mvt_real empty_w;                   /* summed (negative) evidence of views that show it empty */
     int16_t cam[MVT_MAX_CAMERAS];
     int16_t det[MVT_MAX_CAMERAS];
     mvt_real err_px;                    /* summed reprojection error */
@@ -261,6 +277,10 @@ typedef struct mvt_tracker {
     mvt_assoc_ws_t assoc_ws;
     mvt_birth_cand_t cand[MVT_MAX_BIRTH_CANDIDATES];
     int num_cand;
+    /* per camera this frame (mvt_trk_evidence_weights): */
+    uint8_t ev_boxes[MVT_MAX_CAMERAS];     /* the view sends boxes */
+    mvt_real ev_support[MVT_MAX_CAMERAS];  /* ln(p_detect / q_match): a detection at a person's place */
+    mvt_real ev_empty[MVT_MAX_CAMERAS];    /* ln((1 - p_detect) / (1 - q_empty)): nothing there (< 0) */
 } mvt_tracker_t;
 
 /* Fills cfg with the documented defaults (volume: a 10 m cube around the origin, z >= 0). */

@@ -31,6 +31,31 @@ void mvt_trk_associate(mvt_tracker_t *self, int k, int assign[MVT_MAX_TARGETS], 
  * marked in cameras_occluded. O(T * D). */
 void mvt_trk_occlusion(mvt_tracker_t *self, const mvt_view_t *view, int k, const int assign[MVT_MAX_TARGETS]);
 
+/* What a camera's blobs say of a head at x: */
+typedef enum mvt_trk_evidence {
+    MVT_TRK_NO_INFO = 0, /* outside the camera's field or picture (slack_px from the border) */
+    MVT_TRK_COVERED = 1, /* inside a blob's box widened by slack_px: seen, or hidden in that blob */
+    MVT_TRK_EMPTY = 2    /* in the picture and in no blob: that camera shows nobody there */
+} mvt_trk_evidence_t;
+
+/* Whether any detection of the view carries a box (a view without boxes says nothing of empty
+ * places). O(D). */
+int mvt_trk_view_has_boxes(const mvt_view_t *view);
+
+/* The view's evidence on a head at x (call only for a view with boxes). O(D). */
+mvt_trk_evidence_t mvt_trk_view_evidence(const mvt_tracker_t *self, const mvt_view_t *view, int k,
+                                         const mvt_real x[3], mvt_real slack_px);
+
+/* The slack (pixels) around a birth candidate's image point: the birth radius of camera k. */
+mvt_real mvt_trk_birth_radius_px(const mvt_tracker_t *self, int k);
+
+/* Per observed camera, this frame's evidence weights (ev_boxes, ev_support, ev_empty) from its own
+ * clutter: q_match, the probability that a place where nobody is has a detection within the birth
+ * radius (Poisson, from the view's detection count and picture area), and q_empty's complement,
+ * the fraction of the picture its boxes (widened by that radius) cover (views with boxes only: a
+ * view without boxes never shows a place empty). Both clamped to [0.01, 0.95]. O(C D). */
+void mvt_trk_evidence_weights(mvt_tracker_t *self, const mvt_frame_t *frame);
+
 /* Exclusion after the frame's updates: every confirmed track seen in fewer than seen_min_views
  * cameras is kept exclusion_m (horizontally) from every track seen in at least that many. O(T^2). */
 void mvt_trk_exclusion(mvt_tracker_t *self);

@@ -77,6 +77,19 @@ static int top_order(const mvt_tracker_t *self, int t, int u)
     return dv > MVT_R(2.0) * sd ? 1 : 0;
 }
 
+/* Can camera cam have seen the track at all: its predicted image point within 3 sigma (plus the
+ * pixel noise) of the picture, and the prediction's spread smaller than the picture. A head next
+ * to a camera's focal plane projects far outside the picture with an image covariance that spans
+ * it: the gate then admits any detection and the linearised update drags the track (a person
+ * beside a wall camera was pulled 1 m by that camera's other blobs). */
+static int in_picture(const mvt_camera_t *cam, const mvt_pkf_pred_t *p)
+{
+    const mvt_real su = MVT_SQRT(p->hph[0]), sv = MVT_SQRT(p->hph[2]);
+    const mvt_real w = (mvt_real)cam->width, h = (mvt_real)cam->height;
+    const mvt_real mu = MVT_R(3.0) * (su + cam->sigma_px), mv = MVT_R(3.0) * (sv + cam->sigma_px);
+    return su < w && sv < h && p->h[0] >= -mu && p->h[0] <= w + mu && p->h[1] >= -mv && p->h[1] <= h + mv;
+}
+
 static void hypothesise(mvt_tracker_t *self, int k, const int live[], int n_live)
 {
     const mvt_tracker_config_t *c = &self->cfg;
@@ -87,8 +100,10 @@ static void hypothesise(mvt_tracker_t *self, int k, const int live[], int n_live
         const int t = live[i];
         self->merge_nb[t] = -1;
         const mvt_err_t err = mvt_pkf_predict_obs(&self->tracks[t].s, cam, lin, &self->pred[t]);
-        self->pred_ok[t] = err == MVT_OK;
-        if (err == MVT_ERR_BEHIND) {
+        self->pred_ok[t] = err == MVT_OK && in_picture(cam, &self->pred[t]);
+        if (err == MVT_OK && !self->pred_ok[t]) {
+            self->counters.outside_picture++;
+        } else if (err == MVT_ERR_BEHIND) {
             self->counters.behind_camera++;
         } else if (err != MVT_OK) {
             self->counters.numeric_faults++;

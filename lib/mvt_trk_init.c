@@ -79,9 +79,10 @@ static int free_meas(const mvt_tracker_t *self, int k, int d)
     return self->meas_ok[k][d] && !self->used[k][d];
 }
 
-/* Support of point x from the other observed views: the nearest free consistent detection each. */
-static void gather_support(const mvt_tracker_t *self, const int order[], int n_order, int a, int b,
-                           const mvt_real x[3], mvt_birth_cand_t *cand)
+/* Support of point x from the other observed views: the nearest free consistent detection each;
+ * a view with boxes and no such detection that shows x's place in no blob counts as empty. */
+static void gather_support(const mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order,
+                           int a, int b, const mvt_real x[3], mvt_birth_cand_t *cand)
 {
     const mvt_tracker_config_t *c = &self->cfg;
     for (int oi = 0; oi < n_order; oi++) {
@@ -115,11 +116,37 @@ static void gather_support(const mvt_tracker_t *self, const int order[], int n_o
             cand->det[cand->n] = (int16_t)bd;
             cand->err_px += be;
             cand->n++;
+        } else if (self->ev_boxes[k]) {
+            /* no detection within the radius and no box holds the place: that view shows it empty.
+             * (A view without boxes says nothing: a person merged into another's blob has no
+             * detection of their own there either.) */
+            const mvt_real r = mvt_trk_birth_radius_px(self, k);
+            if (mvt_trk_view_evidence(self, &frame->views[k], k, x, r) == MVT_TRK_EMPTY) {
+                cand->empty_w += self->ev_empty[k];
+            }
         }
     }
 }
 
-static void collect_candidates(mvt_tracker_t *self, const int order[], int n_order)
+/* The birth odds of a candidate (mvt_tracker_config_t.p_detect): log >= 0 to be born. The two
+ * views that formed it carry no evidence: the weakest two of its views are left out. */
+static int birth_odds_ok(const mvt_tracker_t *self, const mvt_birth_cand_t *cand)
+{
+    mvt_real sum = MVT_R(0.0), lo1 = MVT_R(1e30), lo2 = MVT_R(1e30);
+    for (int i = 0; i < cand->n; i++) {
+        const mvt_real w = self->ev_support[cand->cam[i]];
+        sum += w;
+        if (w < lo1) {
+            lo2 = lo1;
+            lo1 = w;
+        } else if (w < lo2) {
+            lo2 = w;
+        }
+    }
+    return sum - lo1 - lo2 + cand->empty_w >= MVT_R(0.0);
+}
+
+static void collect_candidates(mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order)
 {
     const mvt_tracker_config_t *c = &self->cfg;
     self->num_cand = 0;
@@ -166,15 +193,21 @@ static void collect_candidates(mvt_tracker_t *self, const int order[], int n_ord
                     }
                     mvt_birth_cand_t cand;
                     cand.n = 2;
+                    cand.empty_w = MVT_R(0.0);
                     cand.cam[0] = (int16_t)a;
                     cand.det[0] = (int16_t)i;
                     cand.cam[1] = (int16_t)b;
                     cand.det[1] = (int16_t)j;
                     cand.err_px = ea + eb;
-                    gather_support(self, order, n_order, a, b, x, &cand);
-                    if (cand.n >= c->birth_min_views) {
-                        add_candidate(self, &cand);
+                    gather_support(self, frame, order, n_order, a, b, x, &cand);
+                    if (cand.n < c->birth_min_views) {
+                        continue;
                     }
+                    if (!birth_odds_ok(self, &cand)) {
+                        self->counters.births_refuted++;
+                        continue;
+                    }
+                    add_candidate(self, &cand);
                 }
             }
         }
@@ -255,7 +288,7 @@ static void birth(mvt_tracker_t *self, const mvt_frame_t *frame, const mvt_birth
 
 void mvt_trk_initiate(mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order)
 {
-    collect_candidates(self, order, n_order);
+    collect_candidates(self, frame, order, n_order);
     /* best first (insertion sort: stable, bounded by MVT_MAX_BIRTH_CANDIDATES) */
     for (int i = 1; i < self->num_cand; i++) {
         const mvt_birth_cand_t key = self->cand[i];

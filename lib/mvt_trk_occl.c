@@ -39,6 +39,81 @@ static int box_ok(const mvt_real b[4])
     return isfinite(b[0]) && isfinite(b[1]) && isfinite(b[2]) && isfinite(b[3]) && b[2] > b[0] && b[3] > b[1];
 }
 
+int mvt_trk_view_has_boxes(const mvt_view_t *view)
+{
+    for (int d = 0; d < view->num_detections && d < MVT_MAX_DETECTIONS; d++) {
+        if (box_ok(view->det[d].box)) {
+            return 1;
+        }
+    }
+    return 0;
+}
+
+mvt_trk_evidence_t mvt_trk_view_evidence(const mvt_tracker_t *self, const mvt_view_t *view, int k,
+                                         const mvt_real x[3], mvt_real slack_px)
+{
+    const mvt_camera_t *cam = &self->cams[k];
+    mvt_real uv[2];
+    if (mvt_cam_project(cam, x, uv, NULL) != MVT_OK || !(uv[0] >= slack_px) || !(uv[1] >= slack_px) ||
+        !(uv[0] <= (mvt_real)cam->width - slack_px) || !(uv[1] <= (mvt_real)cam->height - slack_px)) {
+        return MVT_TRK_NO_INFO; /* out of the picture (or too near its border to say) */
+    }
+    for (int d = 0; d < self->num_meas[k]; d++) {
+        const mvt_real *b = view->det[d].box;
+        if (box_ok(b) && uv[0] >= b[0] - slack_px && uv[0] <= b[2] + slack_px && uv[1] >= b[1] - slack_px &&
+            uv[1] <= b[3] + slack_px) {
+            return MVT_TRK_COVERED;
+        }
+    }
+    return MVT_TRK_EMPTY;
+}
+
+mvt_real mvt_trk_birth_radius_px(const mvt_tracker_t *self, int k)
+{
+    const mvt_tracker_config_t *c = &self->cfg;
+    const mvt_real r = c->birth_reproj_sigma * self->cams[k].sigma_px;
+    return r > c->birth_min_reproj_px ? r : c->birth_min_reproj_px;
+}
+
+static mvt_real clamp_q(mvt_real q)
+{
+    return q < MVT_R(0.01) ? MVT_R(0.01) : (q > MVT_R(0.95) ? MVT_R(0.95) : q);
+}
+
+void mvt_trk_evidence_weights(mvt_tracker_t *self, const mvt_frame_t *frame)
+{
+    const mvt_real pd = self->cfg.p_detect;
+    for (int k = 0; k < self->num_cameras; k++) {
+        const mvt_view_t *view = &frame->views[k];
+        const mvt_camera_t *cam = &self->cams[k];
+        const mvt_real area = (mvt_real)cam->width * (mvt_real)cam->height;
+        const mvt_real r = mvt_trk_birth_radius_px(self, k);
+        int n = 0;
+        mvt_real cover = MVT_R(0.0);
+        self->ev_boxes[k] = 0;
+        for (int d = 0; d < self->num_meas[k]; d++) {
+            n += self->meas_ok[k][d];
+            const mvt_real *b = view->det[d].box;
+            if (view->observed && box_ok(b)) {
+                self->ev_boxes[k] = 1;
+                /* the box widened by r, clipped to the picture (overlaps counted twice: an upper
+                 * bound, which only weakens the evidence of an empty place) */
+                const mvt_real x0 = b[0] - r > MVT_R(0.0) ? b[0] - r : MVT_R(0.0);
+                const mvt_real y0 = b[1] - r > MVT_R(0.0) ? b[1] - r : MVT_R(0.0);
+                const mvt_real x1 = b[2] + r < (mvt_real)cam->width ? b[2] + r : (mvt_real)cam->width;
+                const mvt_real y1 = b[3] + r < (mvt_real)cam->height ? b[3] + r : (mvt_real)cam->height;
+                if (x1 > x0 && y1 > y0) {
+                    cover += (x1 - x0) * (y1 - y0) / area;
+                }
+            }
+        }
+        const mvt_real q_match = clamp_q(MVT_R(1.0) - MVT_EXP(-(mvt_real)n * MVT_R(3.14159265) * r * r / area));
+        const mvt_real q_cover = clamp_q(cover); /* used for views with boxes only */
+        self->ev_support[k] = MVT_LOG(pd / q_match);
+        self->ev_empty[k] = MVT_LOG((MVT_R(1.0) - pd) / (MVT_R(1.0) - q_cover));
+    }
+}
+
 void mvt_trk_occlusion(mvt_tracker_t *self, const mvt_view_t *view, int k, const int assign[MVT_MAX_TARGETS])
 {
     const mvt_tracker_config_t *c = &self->cfg;
@@ -53,7 +128,18 @@ void mvt_trk_occlusion(mvt_tracker_t *self, const mvt_view_t *view, int k, const
     }
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         mvt_track_t *tr = &self->tracks[t];
-        if (tr->id == 0 || tr->status == MVT_TRACK_TENTATIVE || assign[t] >= 0 || !self->pred_ok[t]) {
+        if (tr->id == 0 || assign[t] >= 0 || !self->pred_ok[t]) {
+            continue;
+        }
+        if (tr->status == MVT_TRACK_TENTATIVE) {
+            /* not established, so not hidden either: a view that shows its place in no blob at all
+             * speaks against it (mvt_trk_delete weighs that against the views that saw it) */
+            const mvt_pkf_pred_t *q = &self->pred[t];
+            const mvt_real sq = MVT_SQRT(q->hph[0] > q->hph[2] ? q->hph[0] : q->hph[2]);
+            const mvt_real slack = MVT_R(3.0) * cam->sigma_px + MVT_R(2.0) * sq + MVT_R(8.0);
+            if (mvt_trk_view_evidence(self, view, k, tr->s.x, slack) == MVT_TRK_EMPTY) {
+                tr->cameras_uncovered |= 1u << k;
+            }
             continue;
         }
         /* the boxes are in raw pixels: the Jacobian prediction (the tracker's own when it uses it) */
@@ -103,11 +189,10 @@ void mvt_trk_occlusion(mvt_tracker_t *self, const mvt_view_t *view, int k, const
             }
         }
         if (best < 0) {
-            /* in the image, not seen and in no blob: this view contradicts the track (unless the
-             * detector missed the whole blob) */
-            const mvt_real m = MVT_R(2.0) * sv + MVT_R(2.0) * su + MVT_R(8.0);
-            if (p->h[0] >= m && p->h[0] <= (mvt_real)cam->width - m && p->h[1] >= m &&
-                p->h[1] <= (mvt_real)cam->height - m) {
+            /* not hidden in another track's blob: if the place is in the picture and in no blob at
+             * all, this view contradicts the track (unless the detector missed the whole blob) */
+            const mvt_real slack = MVT_R(3.0) * cam->sigma_px + MVT_R(2.0) * (su > sv ? su : sv) + MVT_R(8.0);
+            if (mvt_trk_view_evidence(self, view, k, tr->s.x, slack) == MVT_TRK_EMPTY) {
                 tr->cameras_uncovered |= 1u << k;
             }
             continue;
@@ -116,7 +201,7 @@ void mvt_trk_occlusion(mvt_tracker_t *self, const mvt_view_t *view, int k, const
          * position (the column's dependence on the unseen head height is dropped), so a hidden
          * track's height stays what the views last measured */
         const mvt_real Hg[3] = {p->H[0], p->H[1], MVT_R(0.0)};
-        const mvt_err_t err = mvt_cv_truncate(&tr->s, Hg, p->h[0], best_lo, best_hi, NULL);
+        const mvt_err_t err = mvt_cv_truncate_ground(&tr->s, Hg, p->h[0], MVT_R(0.0), best_lo, best_hi, NULL);
         if (err == MVT_OK) {
             tr->cameras_occluded |= 1u << k;
             self->counters.occluded_updates++;
@@ -166,11 +251,11 @@ void mvt_trk_exclusion(mvt_tracker_t *self)
             const mvt_real va = horiz_var(&ta->s, n), vb = horiz_var(&tb->s, n);
             mvt_err_t err = MVT_OK;
             if (poor_a) {
-                err = mvt_cv_truncate_ex(&ta->s, n, na, vb, nb + c->exclusion_m, nb + c->exclusion_m + MVT_R(1e3), NULL);
+                err = mvt_cv_truncate_ground(&ta->s, n, na, vb, nb + c->exclusion_m, nb + c->exclusion_m + MVT_R(1e3), NULL);
                 self->counters.exclusion_updates += err == MVT_OK;
             }
             if (poor_b && err != MVT_ERR_INVALID) {
-                err = mvt_cv_truncate_ex(&tb->s, m, -nb, va, -na + c->exclusion_m, -na + c->exclusion_m + MVT_R(1e3),
+                err = mvt_cv_truncate_ground(&tb->s, m, -nb, va, -na + c->exclusion_m, -na + c->exclusion_m + MVT_R(1e3),
                                          NULL);
                 self->counters.exclusion_updates += err == MVT_OK;
             }

@@ -413,6 +413,93 @@ static void test_mvt_tracker_step_vanished_person_contradicted_deleted(void **st
     }
 }
 
+/* A ghost: cameras 0 and 1 each report a blob whose rays meet at G (as two other people's blobs
+ * may), while cameras 2-4, which send boxes and have G in their pictures, show nobody there. Two
+ * real people are seen by all five. With boxes the ghost is never confirmed (births refuted, a
+ * tentative track refuted in the frames it lives); without boxes nothing speaks against it and
+ * it is confirmed (so the test can fail). */
+static void test_mvt_tracker_step_ghost_two_views_refuted_by_three(void **state)
+{
+    (void)state;
+    const mvt_real X[2][3] = {{1.2f, 1.0f, 1.75f}, {4.8f, 3.9f, 1.7f}};
+    const mvt_real G[3] = {3.0f, 2.6f, 1.7f};
+    for (int with_boxes = 1; with_boxes >= 0; with_boxes--) {
+        init();
+        test_rng_t rng = {23};
+        int ghost_confirmed = 0;
+        for (int f = 0; f < 75; f++) {
+            frame_blobs(X, 2, 1000000 + f * 40000, &rng, 2.0, with_boxes);
+            for (int k = 0; k < 2; k++) {
+                mvt_view_t *v = &g_frame.views[k];
+                mvt_real uv[2], c[3];
+                assert_int_equal(mvt_cam_project(&g_cams[k], G, uv, NULL), MVT_OK);
+                mvt_cam_to_camera(&g_cams[k], G, c);
+                const mvt_real half = (mvt_real)0.22 * g_cams[k].fx / c[2];
+                mvt_detection_t *d = &v->det[v->num_detections++];
+                memset(d, 0, sizeof(*d));
+                d->u = uv[0] + (mvt_real)(2.0 * test_normal(&rng));
+                d->v = uv[1] + (mvt_real)(2.0 * test_normal(&rng));
+                d->sigma_px = 2;
+                d->score = 1;
+                d->hue = d->saturation = -1;
+                if (with_boxes) {
+                    d->box[0] = uv[0] - half;
+                    d->box[1] = uv[1] - half;
+                    d->box[2] = uv[0] + half;
+                    d->box[3] = uv[1] + 8 * half;
+                }
+            }
+            mvt_tracker_step(&g_tracker, &g_frame, &g_out);
+            ghost_confirmed += id_near(G) > 0;
+        }
+        assert_true(id_near(X[0]) > 0 && id_near(X[1]) > 0);
+        if (with_boxes) {
+            assert_int_equal(ghost_confirmed, 0);
+            assert_true(g_tracker.counters.births_refuted > 0);
+        } else {
+            assert_true(ghost_confirmed > 50);
+        }
+    }
+}
+
+/* A person stands right under camera 0 (outside its picture, next to its focal plane), seen by the
+ * other four; camera 0 sends a blob of someone else each frame. The prediction in camera 0 lies far
+ * outside its picture with an image spread wider than the picture: camera 0 must not update the
+ * track (a gate that wide admits any blob and the linearised update drags the track). */
+static void test_mvt_tracker_step_camera_that_cannot_see_does_not_update(void **state)
+{
+    (void)state;
+    init();
+    test_rng_t rng = {5};
+    const mvt_real P[1][3] = {{0.45f, 0.40f, 1.75f}};
+    mvt_real uv[2];
+    assert_int_not_equal(mvt_cam_project(&g_cams[0], P[0], uv, NULL) == MVT_OK && uv[0] >= 0 && uv[0] < 768 &&
+                             uv[1] >= 0 && uv[1] < 576, 1);
+    double worst = 0;
+    for (int f = 0; f < 100; f++) {
+        frame_of(P, 1, 1000000 + f * 40000, &rng, 2.0, 0);
+        mvt_view_t *v = &g_frame.views[0];
+        mvt_detection_t *d = &v->det[v->num_detections++];
+        memset(d, 0, sizeof(*d));
+        d->u = (mvt_real)(60 + 5 * test_normal(&rng));
+        d->v = (mvt_real)(540 + 5 * test_normal(&rng));
+        d->sigma_px = 2;
+        d->score = 1;
+        d->hue = d->saturation = -1;
+        mvt_tracker_step(&g_tracker, &g_frame, &g_out);
+        for (int i = 0; i < g_out.num_tracks; i++) {
+            assert_true((g_out.tracks[i].cameras_used & 1u) == 0u);
+        }
+        if (f > 10) {
+            assert_int_equal(g_out.num_tracks, 1);
+            const double e = dist3(g_out.tracks[0].pos_m, P[0]);
+            worst = e > worst ? e : worst;
+        }
+    }
+    assert_true(worst < 0.1);
+    assert_true(g_tracker.counters.outside_picture > 50);
+}
+
 static void test_mvt_tracker_select_under_capacity_keeps_all_in_order(void **state)
 {
     (void)state;
@@ -451,6 +538,8 @@ int main(void)
         cmocka_unit_test(test_mvt_tracker_select_under_capacity_keeps_all_in_order),
         cmocka_unit_test(test_mvt_tracker_step_hidden_in_group_keeps_identity),
         cmocka_unit_test(test_mvt_tracker_step_vanished_person_contradicted_deleted),
+        cmocka_unit_test(test_mvt_tracker_step_ghost_two_views_refuted_by_three),
+        cmocka_unit_test(test_mvt_tracker_step_camera_that_cannot_see_does_not_update),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

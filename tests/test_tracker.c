@@ -181,6 +181,59 @@ static void test_mvt_cv_truncate_matches_quadrature(void **state)
     assert_memory_equal(&st, &before, sizeof(st));
 }
 
+/* The ground variant: the horizontal rows follow the exact truncation (the gain rows of x, y, vx, vy
+ * are the optimal ones), height and vertical speed do not move, and the covariance (Joseph form
+ * with that gain) keeps their variances, stays symmetric and positive semi-definite. */
+static void test_mvt_cv_truncate_ground_keeps_height(void **state)
+{
+    (void)state;
+    test_rng_t rng = {77};
+    for (int trial = 0; trial < 50; trial++) {
+        mvt_cv_state_t st, ref;
+        random_state(&rng, &st);
+        ref = st;
+        const mvt_real H[3] = {(mvt_real)test_normal(&rng), (mvt_real)test_normal(&rng), 0};
+        const mvt_real mu = H[0] * st.x[0] + H[1] * st.x[1];
+        double s2 = 0;
+        for (int i = 0; i < 2; i++)
+            for (int j = 0; j < 2; j++) s2 += (double)H[i] * (double)st.P[i * 6 + j] * (double)H[j];
+        const mvt_real lo = mu + (mvt_real)(0.5 * sqrt(s2)), hi = mu + (mvt_real)(3 * sqrt(s2));
+        assert_int_equal(mvt_cv_truncate_ground(&st, H, mu, 0, lo, hi, NULL), MVT_OK);
+        assert_int_equal(mvt_cv_truncate_ex(&ref, H, mu, 0, lo, hi, NULL), MVT_OK);
+        for (int i = 0; i < 6; i++) {
+            if (i == 2 || i == 5) continue;
+            assert_true(fabs((double)st.x[i] - (double)ref.x[i]) < 1e-4 * (1 + fabs((double)ref.x[i])));
+        }
+        /* PSD: every 2x2 principal minor and the Cholesky of the 6x6 */
+        double L[36] = {0};
+        for (int i = 0; i < 6; i++) {
+            for (int j = 0; j < 6; j++) assert_true(st.P[i * 6 + j] == st.P[j * 6 + i]);
+            for (int j = 0; j <= i; j++) {
+                double a = (double)st.P[i * 6 + j];
+                for (int k = 0; k < j; k++) a -= L[i * 6 + k] * L[j * 6 + k];
+                if (i == j) {
+                    assert_true(a > -1e-6);
+                    L[i * 6 + i] = sqrt(a > 0 ? a : 0);
+                } else {
+                    L[i * 6 + j] = L[j * 6 + j] > 1e-9 ? a / L[j * 6 + j] : 0;
+                }
+            }
+        }
+    }
+    /* the height and vertical speed themselves, and their variances, are untouched */
+    for (int trial = 0; trial < 50; trial++) {
+        mvt_cv_state_t st, before;
+        random_state(&rng, &st);
+        before = st;
+        const mvt_real H[3] = {1, (mvt_real)test_normal(&rng), 0};
+        const mvt_real mu = st.x[0] + H[1] * st.x[1];
+        assert_int_equal(mvt_cv_truncate_ground(&st, H, mu, (mvt_real)0.3, mu + 1, mu + 4, NULL), MVT_OK);
+        assert_true(st.x[2] == before.x[2] && st.x[5] == before.x[5]);
+        assert_true(fabs((double)st.P[2 * 7] - (double)before.P[2 * 7]) < 1e-5 * (1 + (double)before.P[2 * 7]));
+        assert_true(fabs((double)st.P[5 * 7] - (double)before.P[5 * 7]) < 1e-5 * (1 + (double)before.P[5 * 7]));
+    }
+}
+
 static void test_mvt_pkf_innovation_behind_camera_refused(void **state)
 {
     (void)state;
@@ -363,6 +416,7 @@ int main(void)
         cmocka_unit_test(test_mvt_cv_predict_constant_velocity_moves_and_grows),
         cmocka_unit_test(test_mvt_cv_update_point_outlier_gated_state_unchanged),
         cmocka_unit_test(test_mvt_cv_truncate_matches_quadrature),
+        cmocka_unit_test(test_mvt_cv_truncate_ground_keeps_height),
         cmocka_unit_test(test_mvt_pkf_innovation_behind_camera_refused),
         cmocka_unit_test(test_mvt_tracker_step_straight_walk_pkf_tracked),
         cmocka_unit_test(test_mvt_tracker_step_straight_walk_kf_tracked),

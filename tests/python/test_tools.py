@@ -158,3 +158,21 @@ def test_random_rig_lenses_do_not_fold_inside_the_picture():
             assert np.all(np.sum(xn ** 2, axis=1) < cam.field_r2)
             X = cam.centre + (np.c_[xn, np.ones(4)] @ cam.R) * 2.0
             np.testing.assert_allclose(cam.project(X), corners, atol=0.05)
+
+
+def test_covered_only_makes_people_seen_by_one_camera_dont_care():
+    """A person in fewer than two cameras' pictures and any track within 0.5 m of them leave the
+    scoring; everything else is scored as before."""
+    from mvtrack_tools.mot import FrameSet, clear_mot, covered_only, views_per_person
+    rig = smartroom()
+    inside = np.array([3.0, 2.5, 1.7])            # room centre: every camera
+    outside = np.array([3.0, 2.5, 8.0])           # above the cameras: none sees it
+    frames = [FrameSet(i, [1, 2], np.array([inside, outside]), [7, 8, 9],
+                       np.array([inside + 0.05, outside + 0.1, [1.0, 1.0, 1.7]]), True) for i in range(10)]
+    views = views_per_person(rig, frames)
+    assert views[0][0] == len(rig.cameras) and views[0][1] == 0
+    cov = covered_only(frames, views)
+    assert cov[0].gt_ids == [1] and cov[0].hyp_ids == [7, 9]
+    full, part = clear_mot(frames), clear_mot(cov)
+    assert full.false_positives == 10 and full.misses == 0  # the track near the unseen person matches it
+    assert part.misses == 0 and part.false_positives == 10  # the stray track at (1, 1) is still false

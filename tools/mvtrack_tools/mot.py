@@ -60,6 +60,36 @@ def pair_frames(scene: TrackLog, tracks: TrackLog, frame_rate: float = 25.0) -> 
     return out
 
 
+def views_per_person(rig, frames: list[FrameSet]) -> list[np.ndarray]:
+    """For each frame, how many of the rig's cameras have each ground-truth head in their picture
+    (in front, inside the lens model's field, inside the image)."""
+    out = []
+    for fs in frames:
+        n = np.zeros(len(fs.gt_ids), int)
+        for cam in rig.cameras:
+            if len(fs.gt_pos):
+                n += cam.in_image(cam.project(fs.gt_pos))
+        out.append(n)
+    return out
+
+
+def covered_only(frames: list[FrameSet], views: list[np.ndarray], min_views: int = 2,
+                 max_m: float = MATCH_M) -> list[FrameSet]:
+    """The frames with every person seen by fewer than min_views cameras made "don't care" (as the
+    CLEAR evaluations' regions outside the cameras' common view): the person is removed, and so is
+    any hypothesis within max_m of such a person (a track there is neither a hit nor a false one)."""
+    out = []
+    for fs, n in zip(frames, views):
+        keep = n >= min_views
+        hk = np.ones(len(fs.hyp_ids), bool)
+        for p in fs.gt_pos[~keep]:
+            if len(fs.hyp_pos):
+                hk &= np.linalg.norm(fs.hyp_pos - p, axis=1) > max_m
+        out.append(FrameSet(fs.utime, [i for i, k in zip(fs.gt_ids, keep) if k], fs.gt_pos[keep],
+                            [i for i, k in zip(fs.hyp_ids, hk) if k], fs.hyp_pos[hk], fs.have_tracks))
+    return out
+
+
 def distance_matrix(gt: np.ndarray, hyp: np.ndarray, max_m: float = MATCH_M) -> np.ndarray:
     """Euclidean distances (m), NaN where beyond max_m (motmetrics' "cannot match")."""
     if len(gt) == 0 or len(hyp) == 0:

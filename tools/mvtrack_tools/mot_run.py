@@ -25,7 +25,7 @@ from .progress import bar as progress_bar
 from . import plots
 from .experiment1 import run_daemon
 from .lcmio import LogWriter, read_log
-from .mot import as_dict, clear_mot, pair_frames
+from .mot import as_dict, clear_mot, covered_only, pair_frames, views_per_person
 from .paths import DAEMON
 from .rig import random_rig, smartroom
 from .simulate import build_multi, write_multi
@@ -75,7 +75,13 @@ def run_one(out: Path, kind: str, seed: int, merges: list[str], plot: bool, extr
         trk_path = out / "logs" / f"{kind}_{seed}_{merge}_tracks.lcm"
         run_daemon(rig_path, log, trk_path, "pkf", Q, ["--merge", merge] + (extra or []))
         tr = read_log(str(trk_path), lambda c: c in ("TRACKS", "MVTRACK_STATUS"))
-        r = as_dict(clear_mot(pair_frames(sc, tr, rig.frame_rate)))
+        fr = pair_frames(sc, tr, rig.frame_rate)
+        r = as_dict(clear_mot(fr))
+        views = views_per_person(rig, fr)
+        n_gt = sum(len(v) for v in views)
+        cov = clear_mot(covered_only(fr, views))
+        r.update(gt_under_2_views_pct=100.0 * sum(int((v < 2).sum()) for v in views) / max(1, n_gt),
+                 mota_covered=cov.mota, id_switches_covered=cov.id_switches, idf1_covered=cov.idf1)
         st = tr.status[-1] if tr.status else None
         if st is not None:
             r.update(births=st.births, merged_withheld=st.updates_merged_withheld,
@@ -114,11 +120,13 @@ def main(argv: list[str] | None = None) -> int:
     rows.sort(key=lambda r: (r["scene"], r["merge"], r["seed"]))
     (out / "summary.json").write_text(json.dumps(rows, indent=1, default=float))
     print(f"{'scene':12s} {'merge':8s} {'seed':>4s} {'MOTA':>6s} {'MOTP mm':>8s} {'IDsw':>5s} {'IDF1':>6s} "
-          f"{'FP':>5s} {'miss':>5s} {'OSPA m':>7s} {'ids':>4s}")
+          f"{'FP':>5s} {'miss':>5s} {'OSPA m':>7s} {'ids':>4s} {'<2cam%':>6s} {'MOTA2':>6s}")
     for r in rows:
         print(f"{r['scene']:12s} {r['merge']:8s} {r['seed']:4d} {r['mota']:6.3f} {r['motp_mm']:8.1f} "
               f"{r['id_switches']:5d} {r['idf1']:6.3f} {r['false_positives']:5d} {r['misses']:5d} "
-              f"{r['ospa_m']:7.3f} {r['track_ids']:4d}")
+              f"{r['ospa_m']:7.3f} {r['track_ids']:4d} {r['gt_under_2_views_pct']:6.1f} {r['mota_covered']:6.3f}")
+    print("<2cam%: ground-truth person-frames in fewer than 2 cameras' pictures; MOTA2: MOTA with those as "
+          "don't-care (no 3D position without two views)")
     print(f"wrote {out / 'summary.json'} and plots in {out}/")
     return 0
 
