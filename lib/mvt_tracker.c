@@ -314,6 +314,7 @@ mvt_err_t mvt_tracker_step(mvt_tracker_t *self, const mvt_frame_t *frame, mvt_ou
         self->tracks[t].cameras_used = 0u;
         self->tracks[t].cameras_occluded = 0u;
         self->tracks[t].cameras_uncovered = 0u;
+        self->tracks[t].cameras_empty = 0u;
     }
 
     if (self->cfg.filter == MVT_FILTER_PROJECTIVE) {

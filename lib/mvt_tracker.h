@@ -224,8 +224,9 @@ typedef struct mvt_track {
     mvt_cv_state_t s;
     uint32_t cameras_used;      /* this frame */
     uint32_t cameras_occluded;  /* this frame: cameras that explained the track as hidden */
-    uint32_t cameras_uncovered; /* this frame: cameras that show the track's place in their image
-                                   in no blob at all (occlusion on, views with boxes only) */
+    uint32_t cameras_uncovered; /* this frame: cameras in whose picture the track's place is in no
+                                   blob another track took (occlusion on, views with boxes only) */
+    uint32_t cameras_empty;     /* this frame: ... in no blob at all (evidence against the track) */
     uint32_t hit_history;       /* bit 0: this frame had an update, bit 1: previous, ... */
     int32_t misses;             /* consecutive frames not seen (seen_min_views) */
     int64_t last_update_us;     /* last frame seen */

@@ -76,7 +76,7 @@ void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us)
         mvt_real llr = MVT_R(0.0), lo1 = MVT_R(0.0), lo2 = MVT_R(0.0);
         int n_sup = 0;
         for (int k = 0; k < self->num_cameras; k++) {
-            if (tr->cameras_uncovered & (1u << k)) {
+            if (tr->cameras_empty & (1u << k)) {
                 llr += self->ev_empty[k];
             }
             if (!(tr->cameras_used & (1u << k))) {
@@ -93,7 +93,7 @@ void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us)
             n_sup++;
         }
         llr -= n_sup >= 2 ? lo1 + lo2 : (n_sup == 1 ? lo1 : MVT_R(0.0));
-        const int refuted = tr->cameras_uncovered != 0u && llr < MVT_R(0.0);
+        const int refuted = tr->cameras_empty != 0u && llr < MVT_R(0.0);
         hit = hit && !refuted;
         tr->hit_history = (tr->hit_history << 1) | (hit ? 1u : 0u);
         const int contradicted = refuted || (!hit && mvt_trk_popcount(tr->cameras_uncovered) >= c->contra_views);

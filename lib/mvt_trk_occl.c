@@ -138,7 +138,7 @@ void mvt_trk_occlusion(mvt_tracker_t *self, const mvt_view_t *view, int k, const
             const mvt_real sq = MVT_SQRT(q->hph[0] > q->hph[2] ? q->hph[0] : q->hph[2]);
             const mvt_real slack = MVT_R(3.0) * cam->sigma_px + MVT_R(2.0) * sq + MVT_R(8.0);
             if (mvt_trk_view_evidence(self, view, k, tr->s.x, slack) == MVT_TRK_EMPTY) {
-                tr->cameras_uncovered |= 1u << k;
+                tr->cameras_empty |= 1u << k;
             }
             continue;
         }
@@ -189,11 +189,17 @@ void mvt_trk_occlusion(mvt_tracker_t *self, const mvt_view_t *view, int k, const
             }
         }
         if (best < 0) {
-            /* not hidden in another track's blob: if the place is in the picture and in no blob at
-             * all, this view contradicts the track (unless the detector missed the whole blob) */
-            const mvt_real slack = MVT_R(3.0) * cam->sigma_px + MVT_R(2.0) * (su > sv ? su : sv) + MVT_R(8.0);
-            if (mvt_trk_view_evidence(self, view, k, tr->s.x, slack) == MVT_TRK_EMPTY) {
+            /* in the picture, not seen and not hidden in a blob another track took: this view
+             * contradicts the track (unless the detector missed the whole blob) */
+            const mvt_real m = MVT_R(2.0) * sv + MVT_R(2.0) * su + MVT_R(8.0);
+            if (p->h[0] >= m && p->h[0] <= (mvt_real)cam->width - m && p->h[1] >= m &&
+                p->h[1] <= (mvt_real)cam->height - m) {
                 tr->cameras_uncovered |= 1u << k;
+                /* ... and if no blob at all holds the place, it shows the place empty */
+                const mvt_real slack = MVT_R(3.0) * cam->sigma_px + MVT_R(2.0) * (su > sv ? su : sv) + MVT_R(8.0);
+                if (mvt_trk_view_evidence(self, view, k, tr->s.x, slack) == MVT_TRK_EMPTY) {
+                    tr->cameras_empty |= 1u << k;
+                }
             }
             continue;
         }
