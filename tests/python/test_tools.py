@@ -176,3 +176,36 @@ def test_covered_only_makes_people_seen_by_one_camera_dont_care():
     full, part = clear_mot(frames), clear_mot(cov)
     assert full.false_positives == 10 and full.misses == 0  # the track near the unseen person matches it
     assert part.misses == 0 and part.false_positives == 10  # the stray track at (1, 1) is still false
+
+
+def test_learn_q_command_pools_people_and_skips_gaps(tmp_path, capsys):
+    """tools/mvtrack learn-q on a log: two people walking with white acceleration q = (0.7, 0.3,
+    0.05), each with a gap in their truth (second differences across it are not taken): the
+    printed --q is within 6 % per axis; a log without truth is refused with exit 2."""
+    from mvtrack_tools.lcmio import LogWriter, ground_truth
+    from mvtrack_tools.learnq import main as learnq_main
+    rng = np.random.default_rng(4)
+    q, dt, n = np.array([0.7, 0.3, 0.05]), 0.04, 6000
+    F = np.array([[1, dt], [0, 1]])
+    tracks = []
+    for person in range(2):
+        s = np.zeros((n, 3, 2))
+        for ax in range(3):
+            L = np.linalg.cholesky(q[ax] * np.array([[dt ** 3 / 3, dt ** 2 / 2], [dt ** 2 / 2, dt]]))
+            for k in range(1, n):
+                s[k, ax] = F @ s[k - 1, ax] + L @ rng.standard_normal(2)
+        tracks.append(s[:, :, 0] + [2.0 * person, 1.0, 1.7])
+    log = tmp_path / "truth.lcm"
+    w = LogWriter(str(log))
+    for f in range(n):
+        present = [p for p in range(2) if not (1000 + 500 * p <= f < 1100 + 500 * p)]  # gaps
+        u = 1_700_000_000_000_000 + f * 40000
+        w.write(u, "GROUND_TRUTH", ground_truth(u, f, [p + 1 for p in present], np.array([tracks[p][f] for p in present])))
+    w.close()
+    assert learnq_main([str(log)]) == 0
+    line = capsys.readouterr().out.strip().splitlines()[-1]
+    est = np.array([float(v) for v in line.split("--q ")[1].split(",")])
+    np.testing.assert_allclose(est, q, rtol=0.06)
+    empty = tmp_path / "empty.lcm"
+    LogWriter(str(empty)).close()
+    assert learnq_main([str(empty)]) == 2
