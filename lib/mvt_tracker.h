@@ -126,14 +126,14 @@ typedef struct mvt_tracker_config {
     mvt_real p_detect;          /* probability that a camera whose picture holds a person's head
                                    (not hidden) reports it: a detection within the birth radius,
                                    inside a blob's box; (0, 1), default 0.9. It weighs births and
-                                   ghosts against clutter measured per camera and frame
-                                   (mvt_trk_evidence_weights): of a candidate, the two views that
-                                   form it prove nothing (any two rays that meet make one); every
-                                   further view that detects it multiplies its odds by
-                                   p_detect / q_match, every view that shows its place empty by
-                                   (1 - p_detect) / (1 - q_empty); it is born when the product is
-                                   >= 1. A confirmed or tentative track is refuted in a frame the
-                                   same way (views with boxes only) */
+                                   tracks (mvt_trk_evidence_weights): of a candidate, the two views
+                                   that form it prove nothing (any two rays that meet make one);
+                                   every further view that detects it multiplies its odds by
+                                   (p_detect + (1 - p_detect) q) / q, q that view's chance of a
+                                   clutter detection there; every view with boxes that shows its
+                                   place in no blob by 1 - p_detect; it is born when the product is
+                                   >= 1. A tentative or confirmed track is refuted in a frame the
+                                   same way */
 } mvt_tracker_config_t;
 
 /* One detection as the core needs it (raw distorted pixels). */
@@ -280,8 +280,8 @@ typedef struct mvt_tracker {
     int num_cand;
     /* per camera this frame (mvt_trk_evidence_weights): */
     uint8_t ev_boxes[MVT_MAX_CAMERAS];     /* the view sends boxes */
-    mvt_real ev_support[MVT_MAX_CAMERAS];  /* ln(p_detect / q_match): a detection at a person's place */
-    mvt_real ev_empty[MVT_MAX_CAMERAS];    /* ln((1 - p_detect) / (1 - q_empty)): nothing there (< 0) */
+    mvt_real ev_support[MVT_MAX_CAMERAS];  /* log-likelihood ratio of a detection at the place */
+    mvt_real ev_empty[MVT_MAX_CAMERAS];    /* ... of the place in no blob (< 0) */
 } mvt_tracker_t;
 
 /* Fills cfg with the documented defaults (volume: a 10 m cube around the origin, z >= 0). */

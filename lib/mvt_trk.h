@@ -49,11 +49,11 @@ mvt_trk_evidence_t mvt_trk_view_evidence(const mvt_tracker_t *self, const mvt_vi
 /* The slack (pixels) around a birth candidate's image point: the birth radius of camera k. */
 mvt_real mvt_trk_birth_radius_px(const mvt_tracker_t *self, int k);
 
-/* Per observed camera, this frame's evidence weights (ev_boxes, ev_support, ev_empty) from its own
- * clutter: q_match, the probability that a place where nobody is has a detection within the birth
- * radius (Poisson, from the view's detection count and picture area), and q_empty's complement,
- * the fraction of the picture its boxes (widened by that radius) cover (views with boxes only: a
- * view without boxes never shows a place empty). Both clamped to [0.01, 0.95]. O(C D). */
+/* Per observed camera, this frame's evidence weights (ev_boxes, ev_support, ev_empty): a detection
+ * within the birth radius of a place weighs ln((p_detect + (1 - p_detect) q) / q) for a person
+ * there, q the chance that clutter puts one there (Poisson, from the view's detection count and
+ * picture area, clamped to [0.01, 0.95]); a place in no blob weighs ln(1 - p_detect) (views with
+ * boxes only: a view without boxes never shows a place empty). O(C D). */
 void mvt_trk_evidence_weights(mvt_tracker_t *self, const mvt_frame_t *frame);
 
 /* Exclusion after the frame's updates: every confirmed track seen in fewer than seen_min_views

@@ -89,28 +89,22 @@ void mvt_trk_evidence_weights(mvt_tracker_t *self, const mvt_frame_t *frame)
         const mvt_real area = (mvt_real)cam->width * (mvt_real)cam->height;
         const mvt_real r = mvt_trk_birth_radius_px(self, k);
         int n = 0;
-        mvt_real cover = MVT_R(0.0);
         self->ev_boxes[k] = 0;
         for (int d = 0; d < self->num_meas[k]; d++) {
             n += self->meas_ok[k][d];
-            const mvt_real *b = view->det[d].box;
-            if (view->observed && box_ok(b)) {
+            if (view->observed && box_ok(view->det[d].box)) {
                 self->ev_boxes[k] = 1;
-                /* the box widened by r, clipped to the picture (overlaps counted twice: an upper
-                 * bound, which only weakens the evidence of an empty place) */
-                const mvt_real x0 = b[0] - r > MVT_R(0.0) ? b[0] - r : MVT_R(0.0);
-                const mvt_real y0 = b[1] - r > MVT_R(0.0) ? b[1] - r : MVT_R(0.0);
-                const mvt_real x1 = b[2] + r < (mvt_real)cam->width ? b[2] + r : (mvt_real)cam->width;
-                const mvt_real y1 = b[3] + r < (mvt_real)cam->height ? b[3] + r : (mvt_real)cam->height;
-                if (x1 > x0 && y1 > y0) {
-                    cover += (x1 - x0) * (y1 - y0) / area;
-                }
             }
         }
         const mvt_real q_match = clamp_q(MVT_R(1.0) - MVT_EXP(-(mvt_real)n * MVT_R(3.14159265) * r * r / area));
-        const mvt_real q_cover = clamp_q(cover); /* used for views with boxes only */
-        self->ev_support[k] = MVT_LOG(pd / q_match);
-        self->ev_empty[k] = MVT_LOG((MVT_R(1.0) - pd) / (MVT_R(1.0) - q_cover));
+        /* a person is detected (p_detect) or, missed, matched by clutter anyway; nobody is matched
+         * by clutter only. A place looks empty when nothing covers it: with a person there only if
+         * they were missed and no clutter covers it either, so that ratio is 1 - p_detect whatever
+         * the clutter. (Dividing by the chance that clutter leaves the place free, as a first
+         * version did, made an empty place count *for* a person once the boxes covered more of the
+         * picture than p_detect.) */
+        self->ev_support[k] = MVT_LOG((pd + (MVT_R(1.0) - pd) * q_match) / q_match);
+        self->ev_empty[k] = MVT_LOG(MVT_R(1.0) - pd);
     }
 }
 
