@@ -1,5 +1,7 @@
 #include "source.hpp"
 
+#include <opencv2/videoio/registry.hpp>
+
 #include <sys/stat.h>
 
 #include <chrono>
@@ -42,8 +44,11 @@ bool Source::open_capture()
         if (all_digits(spec_)) {
             return cap_.open(std::atoi(spec_.c_str()));
         }
-        if (!live_ && spec_.find('%') == std::string::npos && cap_.open(spec_, cv::CAP_FFMPEG)) {
-            return true; /* files: FFmpeg first (GStreamer's file probing is slow and noisy) */
+        if (!live_ && spec_.find('%') == std::string::npos && cv::videoio_registry::hasBackend(cv::CAP_FFMPEG)) {
+            /* files: FFmpeg only. A file FFmpeg cannot open is not a video; letting GStreamer
+             * probe it as well is slow, and its pipeline, disposed half-open, writes GLib
+             * "CRITICAL" lines to stderr (seen as a flaky hostile-input test) */
+            return cap_.open(spec_, cv::CAP_FFMPEG);
         }
         return cap_.open(spec_);
     } catch (const cv::Exception &) {
