@@ -244,7 +244,7 @@ typedef struct mvt_track {
 
 typedef struct mvt_birth_cand {
     int16_t n;                          /* views */
-    mvt_real empty_w;                   /* summed (negative) evidence of views that show it empty */
+    int16_t empty;                      /* views with boxes that show its place in no blob */
     int16_t cam[MVT_MAX_CAMERAS];
     int16_t det[MVT_MAX_CAMERAS];
     mvt_real err_px;                    /* summed reprojection error */
@@ -281,7 +281,7 @@ typedef struct mvt_tracker {
     /* per camera this frame (mvt_trk_evidence_weights): */
     uint8_t ev_boxes[MVT_MAX_CAMERAS];     /* the view sends boxes */
     mvt_real ev_support[MVT_MAX_CAMERAS];  /* log-likelihood ratio of a detection at the place */
-    mvt_real ev_empty[MVT_MAX_CAMERAS];    /* ... of the place in no blob (< 0) */
+    mvt_real ev_empty;                     /* ... of the place in no blob, ln(1 - p_detect) < 0 */
 } mvt_tracker_t;
 
 /* Fills cfg with the documented defaults (volume: a 10 m cube around the origin, z >= 0). */

@@ -38,10 +38,6 @@ typedef enum mvt_trk_evidence {
     MVT_TRK_EMPTY = 2    /* in the picture and in no blob: that camera shows nobody there */
 } mvt_trk_evidence_t;
 
-/* Whether any detection of the view carries a box (a view without boxes says nothing of empty
- * places). O(D). */
-int mvt_trk_view_has_boxes(const mvt_view_t *view);
-
 /* The view's evidence on a head at x (call only for a view with boxes). O(D). */
 mvt_trk_evidence_t mvt_trk_view_evidence(const mvt_tracker_t *self, const mvt_view_t *view, int k,
                                          const mvt_real x[3], mvt_real slack_px);
@@ -55,6 +51,11 @@ mvt_real mvt_trk_birth_radius_px(const mvt_tracker_t *self, int k);
  * picture area, clamped to [0.01, 0.95]); a place in no blob weighs ln(1 - p_detect) (views with
  * boxes only: a view without boxes never shows a place empty). O(C D). */
 void mvt_trk_evidence_weights(mvt_tracker_t *self, const mvt_frame_t *frame);
+
+/* The log odds "a person is there" of a place that the cameras in support detect and `empty`
+ * views show in no blob: the support weights less the two weakest (any two rays that meet make a
+ * candidate, so two views prove nothing), plus empty * ev_empty. O(C). */
+mvt_real mvt_trk_odds(const mvt_tracker_t *self, uint32_t support, int empty);
 
 /* Exclusion after the frame's updates: every confirmed track seen in fewer than seen_min_views
  * cameras is kept exclusion_m (horizontally) from every track seen in at least that many. O(T^2). */

@@ -12,7 +12,6 @@
  * dup_dist_m in 3D (one person, two tracks), the younger one is deleted. Identities of deleted
  * tracks are never reused.
  */
-#include <math.h>
 #include <stddef.h>
 
 #include "mvt_trk.h"
@@ -70,30 +69,10 @@ void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us)
         const mvt_real std2 = c->seen_max_std_m * c->seen_max_std_m;
         int hit = views >= min_views || (views >= 1 && tr->s.P[0] <= std2 && tr->s.P[7] <= std2 &&
                                                tr->s.P[14] <= std2);
-        /* the frame's odds (p_detect; weights per camera from its clutter): the views that saw
-         * the track, less the two weakest (any coincidence gives two), are evidence for a person,
-         * the views that show its place empty against */
-        mvt_real llr = MVT_R(0.0), lo1 = MVT_R(0.0), lo2 = MVT_R(0.0);
-        int n_sup = 0;
-        for (int k = 0; k < self->num_cameras; k++) {
-            if (tr->cameras_empty & (1u << k)) {
-                llr += self->ev_empty[k];
-            }
-            if (!(tr->cameras_used & (1u << k))) {
-                continue;
-            }
-            const mvt_real w = self->ev_support[k];
-            llr += w;
-            if (n_sup == 0 || w < lo1) {
-                lo2 = lo1;
-                lo1 = w;
-            } else if (n_sup == 1 || w < lo2) {
-                lo2 = w;
-            }
-            n_sup++;
-        }
-        llr -= n_sup >= 2 ? lo1 + lo2 : (n_sup == 1 ? lo1 : MVT_R(0.0));
-        const int refuted = tr->cameras_empty != 0u && llr < MVT_R(0.0);
+        /* the frame's odds (p_detect): the views that saw the track against those that show its
+         * place in no blob at all */
+        const int refuted = tr->cameras_empty != 0u &&
+                            mvt_trk_odds(self, tr->cameras_used, mvt_trk_popcount(tr->cameras_empty)) < MVT_R(0.0);
         hit = hit && !refuted;
         tr->hit_history = (tr->hit_history << 1) | (hit ? 1u : 0u);
         const int contradicted = refuted || (!hit && mvt_trk_popcount(tr->cameras_uncovered) >= c->contra_views);

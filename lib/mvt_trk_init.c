@@ -122,28 +122,20 @@ static void gather_support(const mvt_tracker_t *self, const mvt_frame_t *frame, 
              * detection of their own there either.) */
             const mvt_real r = mvt_trk_birth_radius_px(self, k);
             if (mvt_trk_view_evidence(self, &frame->views[k], k, x, r) == MVT_TRK_EMPTY) {
-                cand->empty_w += self->ev_empty[k];
+                cand->empty++;
             }
         }
     }
 }
 
-/* The birth odds of a candidate (mvt_tracker_config_t.p_detect): log >= 0 to be born. The two
- * views that formed it carry no evidence: the weakest two of its views are left out. */
+/* The birth odds of a candidate (mvt_tracker_config_t.p_detect): log >= 0 to be born. */
 static int birth_odds_ok(const mvt_tracker_t *self, const mvt_birth_cand_t *cand)
 {
-    mvt_real sum = MVT_R(0.0), lo1 = MVT_R(1e30), lo2 = MVT_R(1e30);
+    uint32_t support = 0u;
     for (int i = 0; i < cand->n; i++) {
-        const mvt_real w = self->ev_support[cand->cam[i]];
-        sum += w;
-        if (w < lo1) {
-            lo2 = lo1;
-            lo1 = w;
-        } else if (w < lo2) {
-            lo2 = w;
-        }
+        support |= 1u << cand->cam[i];
     }
-    return sum - lo1 - lo2 + cand->empty_w >= MVT_R(0.0);
+    return mvt_trk_odds(self, support, cand->empty) >= MVT_R(0.0);
 }
 
 static void collect_candidates(mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order)
@@ -193,7 +185,7 @@ static void collect_candidates(mvt_tracker_t *self, const mvt_frame_t *frame, co
                     }
                     mvt_birth_cand_t cand;
                     cand.n = 2;
-                    cand.empty_w = MVT_R(0.0);
+                    cand.empty = 0;
                     cand.cam[0] = (int16_t)a;
                     cand.det[0] = (int16_t)i;
                     cand.cam[1] = (int16_t)b;

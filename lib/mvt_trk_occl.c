@@ -39,16 +39,6 @@ static int box_ok(const mvt_real b[4])
     return isfinite(b[0]) && isfinite(b[1]) && isfinite(b[2]) && isfinite(b[3]) && b[2] > b[0] && b[3] > b[1];
 }
 
-int mvt_trk_view_has_boxes(const mvt_view_t *view)
-{
-    for (int d = 0; d < view->num_detections && d < MVT_MAX_DETECTIONS; d++) {
-        if (box_ok(view->det[d].box)) {
-            return 1;
-        }
-    }
-    return 0;
-}
-
 mvt_trk_evidence_t mvt_trk_view_evidence(const mvt_tracker_t *self, const mvt_view_t *view, int k,
                                          const mvt_real x[3], mvt_real slack_px)
 {
@@ -104,8 +94,38 @@ void mvt_trk_evidence_weights(mvt_tracker_t *self, const mvt_frame_t *frame)
          * version did, made an empty place count *for* a person once the boxes covered more of the
          * picture than p_detect.) */
         self->ev_support[k] = MVT_LOG((pd + (MVT_R(1.0) - pd) * q_match) / q_match);
-        self->ev_empty[k] = MVT_LOG(MVT_R(1.0) - pd);
     }
+    self->ev_empty = MVT_LOG(MVT_R(1.0) - pd);
+}
+
+mvt_real mvt_trk_odds(const mvt_tracker_t *self, uint32_t support, int empty)
+{
+    mvt_real sum = MVT_R(0.0), lo1 = MVT_R(0.0), lo2 = MVT_R(0.0);
+    int n = 0;
+    for (int k = 0; k < self->num_cameras; k++) {
+        if (!(support & (1u << k))) {
+            continue;
+        }
+        const mvt_real w = self->ev_support[k];
+        sum += w;
+        if (n == 0 || w < lo1) {
+            lo2 = lo1;
+            lo1 = w;
+        } else if (n == 1 || w < lo2) {
+            lo2 = w;
+        }
+        n++;
+    }
+    sum -= n >= 2 ? lo1 + lo2 : (n == 1 ? lo1 : MVT_R(0.0));
+    return sum + (mvt_real)empty * self->ev_empty;
+}
+
+/* The slack around a track's predicted head when asking a view whether its place is empty: the
+ * detection noise, twice the prediction's spread in the image, 8 px. */
+static mvt_real empty_slack(const mvt_camera_t *cam, const mvt_pkf_pred_t *p)
+{
+    const mvt_real s2 = p->hph[0] > p->hph[2] ? p->hph[0] : p->hph[2];
+    return MVT_R(3.0) * cam->sigma_px + MVT_R(2.0) * MVT_SQRT(s2) + MVT_R(8.0);
 }
 
 void mvt_trk_occlusion(mvt_tracker_t *self, const mvt_view_t *view, int k, const int assign[MVT_MAX_TARGETS])
@@ -113,11 +133,7 @@ void mvt_trk_occlusion(mvt_tracker_t *self, const mvt_view_t *view, int k, const
     const mvt_tracker_config_t *c = &self->cfg;
     const mvt_camera_t *cam = &self->cams[k];
     const int nd = self->num_meas[k];
-    int any = 0;
-    for (int d = 0; d < nd && !any; d++) {
-        any = box_ok(view->det[d].box);
-    }
-    if (!any) {
+    if (!self->ev_boxes[k]) {
         return; /* a view without boxes can neither hide nor contradict */
     }
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
@@ -128,10 +144,7 @@ void mvt_trk_occlusion(mvt_tracker_t *self, const mvt_view_t *view, int k, const
         if (tr->status == MVT_TRACK_TENTATIVE) {
             /* not established, so not hidden either: a view that shows its place in no blob at all
              * speaks against it (mvt_trk_delete weighs that against the views that saw it) */
-            const mvt_pkf_pred_t *q = &self->pred[t];
-            const mvt_real sq = MVT_SQRT(q->hph[0] > q->hph[2] ? q->hph[0] : q->hph[2]);
-            const mvt_real slack = MVT_R(3.0) * cam->sigma_px + MVT_R(2.0) * sq + MVT_R(8.0);
-            if (mvt_trk_view_evidence(self, view, k, tr->s.x, slack) == MVT_TRK_EMPTY) {
+            if (mvt_trk_view_evidence(self, view, k, tr->s.x, empty_slack(cam, &self->pred[t])) == MVT_TRK_EMPTY) {
                 tr->cameras_empty |= 1u << k;
             }
             continue;
@@ -190,8 +203,7 @@ void mvt_trk_occlusion(mvt_tracker_t *self, const mvt_view_t *view, int k, const
                 p->h[1] <= (mvt_real)cam->height - m) {
                 tr->cameras_uncovered |= 1u << k;
                 /* ... and if no blob at all holds the place, it shows the place empty */
-                const mvt_real slack = MVT_R(3.0) * cam->sigma_px + MVT_R(2.0) * (su > sv ? su : sv) + MVT_R(8.0);
-                if (mvt_trk_view_evidence(self, view, k, tr->s.x, slack) == MVT_TRK_EMPTY) {
+                if (mvt_trk_view_evidence(self, view, k, tr->s.x, empty_slack(cam, p)) == MVT_TRK_EMPTY) {
                     tr->cameras_empty |= 1u << k;
                 }
             }
