@@ -5,11 +5,30 @@ C core they test.
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import cv2
 import numpy as np
+
+
+def _radial_map(dist: tuple, r: np.ndarray) -> np.ndarray:
+    """OpenCV's radial distortion of a normalised radius: r (1 + k1 r^2 + k2 r^4 + k3 r^6) /
+    (1 + k4 r^2 + k5 r^4 + k6 r^6)."""
+    d = np.zeros(8)
+    d[:len(dist)] = dist
+    r2 = r * r
+    return r * (1 + r2 * (d[0] + r2 * (d[1] + r2 * d[4]))) / (1 + r2 * (d[5] + r2 * (d[6] + r2 * d[7])))
+
+
+@functools.lru_cache(maxsize=256)
+def _field_r2(dist: tuple) -> float:
+    """Camera.field_r2 for these coefficients: scanned in steps of 1/256 up to r = 20 (cached:
+    Camera.project asks on every call)."""
+    r = np.arange(1, 20 * 256 + 1) / 256.0
+    bad = np.flatnonzero(~(np.diff(np.concatenate([[0.0], _radial_map(dist, r)])) > 0))
+    return float((r[bad[0]] - 1 / 256.0) ** 2) if len(bad) else float("inf")
 
 
 @dataclass
@@ -38,17 +57,11 @@ class Camera:
     @property
     def field_r2(self) -> float:
         """The lens model's field: normalised x^2 + y^2 up to the first maximum of the radial map
-        r (1 + k1 r^2 + k2 r^4 + k3 r^6) / (1 + k4 r^2 + ...). Beyond it the polynomial folds points
-        back into the picture; a real lens shows nothing of them. inf when it never folds (r <= 20).
-        The core computes the same (mvt_camera.c); both are checked against the analytic fold of a k1-only
-        lens (tests/test_camera.c, tests/python/test_tools.py)."""
-        d = np.zeros(8)
-        d[:len(self.dist)] = np.asarray(self.dist, float).ravel()[:8]
-        r = np.arange(1, 20 * 256 + 1) / 256.0
-        r2 = r * r
-        g = r * (1 + r2 * (d[0] + r2 * (d[1] + r2 * d[4]))) / (1 + r2 * (d[5] + r2 * (d[6] + r2 * d[7])))
-        bad = np.flatnonzero(~(np.diff(np.concatenate([[0.0], g])) > 0))
-        return float((r[bad[0]] - 1 / 256.0) ** 2) if len(bad) else float("inf")
+        (_radial_map). Beyond it the polynomial folds points back into the picture; a real lens
+        shows nothing of them. inf when it never folds (r <= 20). The core computes the same
+        (mvt_camera.c); both are checked against the analytic fold of a k1-only lens
+        (tests/test_camera.c, tests/python/test_tools.py)."""
+        return _field_r2(tuple(np.asarray(self.dist, float).ravel()[:8]))
 
     def in_field(self, X: np.ndarray) -> np.ndarray:
         """World points (N,3) the camera can image: in front, within the lens model's field."""
@@ -195,9 +208,7 @@ def _lens_covers_image(cam: Camera, margin: float) -> bool:
     r2 = cam.field_r2
     if not np.isfinite(r2):
         return True
-    d = np.zeros(8)
-    d[:len(cam.dist)] = np.asarray(cam.dist, float).ravel()[:8]
-    g = np.sqrt(r2) * (1 + r2 * (d[0] + r2 * (d[1] + r2 * d[4]))) / (1 + r2 * (d[5] + r2 * (d[6] + r2 * d[7])))
+    g = float(_radial_map(tuple(np.asarray(cam.dist, float).ravel()[:8]), np.array([np.sqrt(r2)]))[0])
     return g > margin * rd
 
 
