@@ -31,11 +31,15 @@ class SingleTargetResult:
     first_matched: int     # index of the first matched frame
 
 
-def learn_q(pos: np.ndarray, dt: float) -> np.ndarray:
-    """Per-axis white-acceleration density (m^2/s^3) from ground-truth positions (n, 3):
-    for that model Var(second difference) = 2/3 q dt^3."""
-    d2 = pos[2:] - 2 * pos[1:-1] + pos[:-2]
+def q_from_second_differences(d2: np.ndarray, dt: float) -> np.ndarray:
+    """Per-axis white-acceleration density (m^2/s^3) from second differences (n, 3) of positions
+    sampled every dt: for that model Var(second difference) = 2/3 q dt^3."""
     return 1.5 * d2.var(axis=0) / dt ** 3
+
+
+def learn_q(pos: np.ndarray, dt: float) -> np.ndarray:
+    """q_from_second_differences of one trajectory (n, 3)."""
+    return q_from_second_differences(pos[2:] - 2 * pos[1:-1] + pos[:-2], dt)
 
 
 def pcrlb_position_mse(rig: Rig, model: WalkModel, pos: np.ndarray, var_px2: float,

@@ -1,7 +1,7 @@
 """Learns mvtrackd's --q (white-noise acceleration density per axis, m^2/s^3) from ground truth.
 
 For the constant-velocity model with white acceleration of density q, the second difference of
-positions sampled every dt has variance 2/3 q dt^3 per axis (evaluate.learn_q). Each person's
+positions sampled every dt has variance 2/3 q dt^3 per axis (evaluate.q_from_second_differences). Each person's
 track in the log's GROUND_TRUTH messages gives second differences over consecutive frames; they
 are pooled over people. Prints the value to pass as `mvtrackd --q X,Y,Z`.
 
@@ -14,6 +14,7 @@ import sys
 
 import numpy as np
 
+from .evaluate import q_from_second_differences
 from .lcmio import read_log
 
 
@@ -51,7 +52,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"mvtrack learn-q: {a.log} has {len(d2)} usable second differences (need >= 10 "
               "GROUND_TRUTH frames of a person, one period apart)", file=sys.stderr)
         return 2
-    q = 1.5 * d2.var(axis=0) / dt ** 3
+    q = q_from_second_differences(d2, dt)
     print(f"{len(d2)} second differences; q = {q[0]:.4g}, {q[1]:.4g}, {q[2]:.4g} m^2/s^3")
     print(f"mvtrackd --q {q[0]:.4g},{q[1]:.4g},{q[2]:.4g}")
     return 0
