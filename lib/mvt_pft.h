@@ -141,6 +141,33 @@ mvt_err_t mvt_pft_init(mvt_pft_t *self, const mvt_pft_config_t *cfg, const mvt_c
  * estimates + the blob tracker's. MVT_ERR_INVALID (counted, state unchanged) when time goes back. */
 mvt_err_t mvt_pft_step(mvt_pft_t *self, const mvt_frame_t *frame, mvt_output_t *out);
 
+/* The particle filter's persistent part (see mvt_tracker_persist_t): its targets with their
+ * particles, identities, the identities kept for recovery, the random generator, clock, counters,
+ * and the blob tracker's own. */
+typedef struct mvt_pft_persist {
+    mvt_tracker_persist_t det;
+    mvt_pft_target_t targets[MVT_MAX_TARGETS];
+    int32_t next_id;
+    int32_t have_time;
+    int64_t last_utime_us;
+    struct {
+        int32_t id, blob_id;
+        int64_t until_us;
+    } lost[MVT_MAX_TARGETS];
+    mvt_rng_t rng;
+    mvt_pft_counters_t counters;
+} mvt_pft_persist_t;
+
+void mvt_pft_save(const mvt_pft_t *self, mvt_pft_persist_t *out);
+
+/* As mvt_tracker_resume: the whole state is checked first (pool sizes equal to the configured
+ * num_particles, particles and weights finite, weights normalised, identities unique), then
+ * copied; unobserved_us moves the targets' support and recovery clocks. */
+mvt_err_t mvt_pft_resume(mvt_pft_t *self, const mvt_pft_persist_t *p, int64_t unobserved_us);
+
+/* Published identities (the targets') and the blob tracker's from now on are >= first. */
+void mvt_pft_reserve_ids(mvt_pft_t *self, int32_t first);
+
 #ifdef __cplusplus
 }
 #endif

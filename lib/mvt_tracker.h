@@ -306,6 +306,37 @@ mvt_err_t mvt_tracker_step(mvt_tracker_t *self, const mvt_frame_t *frame, mvt_ou
 int mvt_tracker_select(const mvt_tracker_t *self, int cam, const mvt_detection_t *in, int n_in,
                        int keep[MVT_MAX_DETECTIONS]);
 
+/* What a tracker carries from one frame to the next, and nothing else: its tracks, the next
+ * identity, its clock and its counters (the configuration and cameras come from the caller, the
+ * workspaces are rebuilt every frame). Pointer-free and fixed-size, so a caller may store it as
+ * bytes (a daemon's checkpoint) and give it back to a tracker built with the same configuration. */
+typedef struct mvt_tracker_persist {
+    mvt_track_t tracks[MVT_MAX_TARGETS];
+    int32_t next_id;
+    int32_t have_time;
+    int64_t last_utime_us;
+    mvt_counters_t counters;
+} mvt_tracker_persist_t;
+
+/* Copies the persistent part of the tracker into out (padding zeroed: equal states give equal
+ * bytes). O(MVT_MAX_TARGETS). */
+void mvt_tracker_save(const mvt_tracker_t *self, mvt_tracker_persist_t *out);
+
+/* Restores a saved state into a tracker initialised with the same configuration and cameras.
+ * The state is checked whole before anything is copied: identities positive, unique and below
+ * next_id, statuses known, states finite with a positive-definite covariance, every time at or
+ * before the saved clock. MVT_ERR_INVALID leaves the tracker unchanged.
+ * unobserved_us >= 0 is time during which nobody watched (the process was down): the tracks'
+ * "last seen / explained / consistent" clocks move forward by it, so an outage is not taken as
+ * evidence that people left; the filters still predict across the whole time (their covariance
+ * grows with it). O(MVT_MAX_TARGETS). */
+mvt_err_t mvt_tracker_resume(mvt_tracker_t *self, const mvt_tracker_persist_t *p, int64_t unobserved_us);
+
+/* Identities given from now on are >= first (> 0): a caller that cannot restore a state but knows
+ * which identities were used before (a daemon restarted without its checkpoint) keeps them
+ * unique. Never lowers the counter. */
+void mvt_tracker_reserve_ids(mvt_tracker_t *self, int32_t first);
+
 /* Fills out with the current tracks (no processing). */
 void mvt_tracker_output(const mvt_tracker_t *self, int64_t utime_us, mvt_output_t *out);
 

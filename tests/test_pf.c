@@ -342,6 +342,27 @@ static mvt_view_t *empty_view(int k)
     return v;
 }
 
+/* g_frame at frame f of two people walking parallel 0.9 m apart: masks painted, head detections. */
+static void two_people_frame(int f, double heads[2][3])
+{
+    const double h[2][3] = {{2.0 + 0.02 * f, 2.1, 1.70}, {2.0 + 0.02 * f, 3.0, 1.80}};
+    memcpy(heads, h, sizeof(h));
+    g_frame.utime_us = 1000000 + (int64_t)f * 40000;
+    for (int k = 0; k < 5; k++) {
+        mvt_view_t *v = empty_view(k);
+        for (int p = 0; p < 2; p++) {
+            paint(k, heads[p], (uint8_t)(90 * p + 10));
+            const mvt_real hp[3] = {(mvt_real)heads[p][0], (mvt_real)heads[p][1], (mvt_real)heads[p][2]};
+            mvt_real uv[2];
+            if (mvt_cam_project(&g_cams[k], hp, uv, NULL) == MVT_OK) {
+                mvt_detection_t *d = &v->det[v->num_detections++];
+                memset(d, 0, sizeof(*d));
+                d->u = uv[0]; d->v = uv[1]; d->sigma_px = 3; d->score = 1; d->hue = d->saturation = -1;
+            }
+        }
+    }
+}
+
 /* Two people walking parallel 0.9 m apart; returns the worst horizontal error over the last 50
  * frames; *head_out counts frames x people whose true head lies inside the reported volume. */
 static double run_two(uint64_t seed, int frames, int column, mvt_output_t *last, int *head_in)
@@ -357,21 +378,8 @@ static double run_two(uint64_t seed, int frames, int column, mvt_output_t *last,
     assert_int_equal(mvt_pft_init(&g_pft, &cfg, g_cams, 5), MVT_OK);
     double worst = 0;
     for (int f = 0; f < frames; f++) {
-        const double heads[2][3] = {{2.0 + 0.02 * f, 2.1, 1.70}, {2.0 + 0.02 * f, 3.0, 1.80}};
-        g_frame.utime_us = 1000000 + (int64_t)f * 40000;
-        for (int k = 0; k < 5; k++) {
-            mvt_view_t *v = empty_view(k);
-            for (int p = 0; p < 2; p++) {
-                paint(k, heads[p], (uint8_t)(90 * p + 10));
-                const mvt_real hp[3] = {(mvt_real)heads[p][0], (mvt_real)heads[p][1], (mvt_real)heads[p][2]};
-                mvt_real uv[2];
-                if (mvt_cam_project(&g_cams[k], hp, uv, NULL) == MVT_OK) {
-                    mvt_detection_t *d = &v->det[v->num_detections++];
-                    memset(d, 0, sizeof(*d));
-                    d->u = uv[0]; d->v = uv[1]; d->sigma_px = 3; d->score = 1; d->hue = d->saturation = -1;
-                }
-            }
-        }
+        double heads[2][3];
+        two_people_frame(f, heads);
         assert_int_equal(mvt_pft_step(&g_pft, &g_frame, last), MVT_OK);
         if (f >= frames - 50) {
             assert_int_equal(last->num_tracks, 2);
@@ -474,6 +482,66 @@ static void test_pft_lost_person_recovers_identity_from_blob_track(void **state)
     assert_true(after != before && after > 0);
 }
 
+/* A saved state restored into a fresh filter continues bit for bit (particles, random stream,
+ * identities); a state with one bad value is refused whole. */
+static mvt_pft_t g_pft2;
+static mvt_pft_persist_t g_saved, g_bad;
+static mvt_output_t g_outs[20];
+
+static void test_pft_resume_continues_bit_for_bit_and_refuses_bad_state(void **state)
+{
+    (void)state;
+    assert_int_equal(test_room_cameras(g_cams, 1), 0);
+    mvt_pft_config_t cfg;
+    mvt_pft_config_default(&cfg);
+    cfg.num_particles = 200;
+    for (int i = 0; i < 3; i++) cfg.det.volume_min[i] = 0;
+    cfg.det.volume_max[0] = 6; cfg.det.volume_max[1] = 5; cfg.det.volume_max[2] = 2.5;
+    assert_int_equal(mvt_pft_init(&g_pft, &cfg, g_cams, 5), MVT_OK);
+    double heads[2][3];
+    for (int f = 0; f < 30; f++) {
+        two_people_frame(f, heads);
+        assert_int_equal(mvt_pft_step(&g_pft, &g_frame, &g_out), MVT_OK);
+    }
+    assert_int_equal(g_out.num_tracks, 2);
+    mvt_pft_save(&g_pft, &g_saved);
+    for (int f = 30; f < 50; f++) {
+        two_people_frame(f, heads);
+        assert_int_equal(mvt_pft_step(&g_pft, &g_frame, &g_outs[f - 30]), MVT_OK);
+    }
+    assert_int_equal(mvt_pft_init(&g_pft2, &cfg, g_cams, 5), MVT_OK);
+    assert_int_equal(mvt_pft_resume(&g_pft2, &g_saved, 0), MVT_OK);
+    for (int f = 30; f < 50; f++) {
+        two_people_frame(f, heads);
+        assert_int_equal(mvt_pft_step(&g_pft2, &g_frame, &g_out), MVT_OK);
+        assert_int_equal(g_out.num_tracks, g_outs[f - 30].num_tracks);
+        assert_memory_equal(g_out.tracks, g_outs[f - 30].tracks, (size_t)g_out.num_tracks * sizeof(g_out.tracks[0]));
+    }
+    /* bad states: refused, the filter unchanged */
+    for (int c = 0; c < 6; c++) {
+        mvt_pft_save(&g_pft2, &g_saved); /* the state before the refused resume */
+        int t = 0;
+        while (g_saved.targets[t].id == 0) t++;
+        g_bad = g_saved;
+        switch (c) {
+        case 0: g_bad.targets[t].pool.n = 199; break;              /* not the configured count */
+        case 1: g_bad.targets[t].pool.w[3] = NAN; break;
+        case 2: g_bad.targets[t].pool.x[0] = INFINITY; break;
+        case 3: g_bad.rng.inc = 2; break;                          /* not a PCG stream */
+        case 4: g_bad.targets[(t + 1) % MVT_MAX_TARGETS] = g_bad.targets[t]; break; /* identity twice */
+        case 5: g_bad.det.tracks[0].id = 5; g_bad.det.tracks[0].status = 9; break;
+        }
+        assert_int_equal(mvt_pft_resume(&g_pft2, &g_bad, 0), MVT_ERR_INVALID);
+        mvt_pft_save(&g_pft2, &g_bad);
+        assert_memory_equal(&g_bad, &g_saved, sizeof(g_bad));
+    }
+    /* identities reserved above the ones used before a restart */
+    mvt_pft_reserve_ids(&g_pft2, 1000);
+    assert_true(g_pft2.next_id == 1000 && g_pft2.det.next_id == 1000);
+    mvt_pft_reserve_ids(&g_pft2, 10);
+    assert_true(g_pft2.next_id == 1000);
+}
+
 static void test_pft_time_backwards_refused(void **state)
 {
     (void)state;
@@ -513,6 +581,7 @@ int main(void)
         cmocka_unit_test(test_weight_point_and_column_match_projection),
         cmocka_unit_test(test_pft_two_people_tracked_and_reproducible),
         cmocka_unit_test(test_pft_lost_person_recovers_identity_from_blob_track),
+        cmocka_unit_test(test_pft_resume_continues_bit_for_bit_and_refuses_bad_state),
         cmocka_unit_test(test_pft_time_backwards_refused),
         cmocka_unit_test(test_pft_config_invalid_rejected),
     };

@@ -340,6 +340,114 @@ static void test_mvt_tracker_step_unseen_track_coasts_then_dies(void **state)
     assert_true(g_out.tracks[0].id > id);
 }
 
+/* A saved tracker restored into a fresh one continues bit for bit; a state with one bad value is
+ * refused whole; time while nobody watched (unobserved_us) is not time unseen. */
+static mvt_tracker_t g_tracker2;
+static mvt_tracker_persist_t g_saved, g_bad;
+
+static void blank_frame(int64_t t)
+{
+    memset(&g_frame, 0, sizeof(g_frame));
+    g_frame.utime_us = t;
+    for (int k = 0; k < 5; k++) { g_frame.views[k].observed = 1; g_frame.views[k].utime_us = t; }
+}
+
+static void test_mvt_tracker_resume_continues_and_refuses_bad_state(void **state)
+{
+    (void)state;
+    mvt_camera_t cams[5];
+    init_tracker(cams, MVT_FILTER_PROJECTIVE, MVT_PKF_JACOBIAN);
+    test_rng_t rng = {42}, rng_at_save;
+    int64_t t = 1000000;
+    for (int i = 0; i < 30; i++, t += 40000) {
+        const mvt_real x[3] = {(mvt_real)(1.0 + 0.02 * i), 2.0f, 1.7f};
+        frame_of(cams, 5, x, t, &rng, 2.0);
+        assert_int_equal(mvt_tracker_step(&g_tracker, &g_frame, &g_out), MVT_OK);
+    }
+    mvt_tracker_save(&g_tracker, &g_saved);
+    rng_at_save = rng;
+    static mvt_output_t outs[20];
+    for (int i = 30; i < 50; i++) {
+        const mvt_real x[3] = {(mvt_real)(1.0 + 0.02 * i), 2.0f, 1.7f};
+        frame_of(cams, 5, x, t + (i - 30) * 40000, &rng, 2.0);
+        assert_int_equal(mvt_tracker_step(&g_tracker, &g_frame, &outs[i - 30]), MVT_OK);
+    }
+    assert_int_equal(outs[19].num_tracks, 1);
+    mvt_tracker_config_t cfg = g_tracker.cfg;
+    assert_int_equal(mvt_tracker_init(&g_tracker2, &cfg, cams, 5), MVT_OK);
+    assert_int_equal(mvt_tracker_resume(&g_tracker2, &g_saved, 0), MVT_OK);
+    rng = rng_at_save;
+    for (int i = 30; i < 50; i++) {
+        const mvt_real x[3] = {(mvt_real)(1.0 + 0.02 * i), 2.0f, 1.7f};
+        frame_of(cams, 5, x, t + (i - 30) * 40000, &rng, 2.0);
+        assert_int_equal(mvt_tracker_step(&g_tracker2, &g_frame, &g_out), MVT_OK);
+        assert_int_equal(g_out.num_tracks, outs[i - 30].num_tracks);
+        assert_memory_equal(g_out.tracks, outs[i - 30].tracks, (size_t)g_out.num_tracks * sizeof(g_out.tracks[0]));
+    }
+    /* one bad value anywhere: refused, the tracker unchanged */
+    int live = 0;
+    while (g_saved.tracks[live].id == 0) live++;
+    for (int c = 0; c < 8; c++) {
+        mvt_tracker_save(&g_tracker2, &g_saved);
+        g_bad = g_saved;
+        mvt_track_t *tr = &g_bad.tracks[live];
+        switch (c) {
+        case 0: tr->s.x[1] = NAN; break;
+        case 1: tr->s.P[7] = -1.0f; break;                       /* variance of y negative */
+        case 2: tr->s.P[1] = 5.0f; break;                        /* not symmetric */
+        case 3: tr->status = 7; break;
+        case 4: tr->last_update_us = g_bad.last_utime_us + 1; break; /* after the clock */
+        case 5: g_bad.tracks[(live + 1) % MVT_MAX_TARGETS] = *tr; break; /* identity twice */
+        case 6: g_bad.next_id = 0; break;
+        case 7: tr->id = -3; break;
+        }
+        assert_int_equal(mvt_tracker_resume(&g_tracker2, &g_bad, 0), MVT_ERR_INVALID);
+        mvt_tracker_save(&g_tracker2, &g_bad);
+        assert_memory_equal(&g_bad, &g_saved, sizeof(g_bad));
+    }
+    assert_int_equal(mvt_tracker_resume(&g_tracker2, &g_saved, -1), MVT_ERR_INVALID);
+
+    /* A person standing 0.3 m from a side wall; the process is down for 0.5 s; the first frame after
+     * the restart does not show them (hidden). Unseen for 0.3 s near a wall means "left the room"
+     * (exit_coast_s), but the outage was nobody watching, not an empty place: resumed with
+     * unobserved_us the track stays; without it, it is deleted as gone. */
+    init_tracker(cams, MVT_FILTER_PROJECTIVE, MVT_PKF_JACOBIAN);
+    t = 1000000;
+    const mvt_real wall[3] = {0.3f, 2.5f, 1.7f};
+    for (int i = 0; i < 20; i++, t += 40000) {
+        frame_of(cams, 5, wall, t, &rng, 1.0);
+        assert_int_equal(mvt_tracker_step(&g_tracker, &g_frame, &g_out), MVT_OK);
+    }
+    assert_true(g_out.num_tracks == 1 && g_out.tracks[0].status == MVT_TRACK_CONFIRMED);
+    const int32_t id = g_out.tracks[0].id;
+    mvt_tracker_save(&g_tracker, &g_saved);
+    const int64_t down_us = 500000, restart = t - 40000 + down_us + 40000;
+    for (int with = 0; with < 2; with++) {
+        assert_int_equal(mvt_tracker_init(&g_tracker2, &cfg, cams, 5), MVT_OK);
+        assert_int_equal(mvt_tracker_resume(&g_tracker2, &g_saved, with ? down_us : 0), MVT_OK);
+        blank_frame(restart);
+        assert_int_equal(mvt_tracker_step(&g_tracker2, &g_frame, &g_out), MVT_OK);
+        if (with) {
+            assert_true(g_out.num_tracks == 1 && g_out.tracks[0].id == id);
+            assert_int_equal(g_out.tracks[0].status, MVT_TRACK_COASTING);
+        } else {
+            assert_int_equal(g_out.num_tracks, 0);
+            assert_int_equal(g_tracker2.counters.deleted_exit, 1);
+        }
+    }
+    /* identities reserved above those used before a restart without a state */
+    mvt_tracker_reserve_ids(&g_tracker2, 5000);
+    mvt_tracker_reserve_ids(&g_tracker2, 7);
+    const mvt_real newcomer[3] = {3.0f, 2.5f, 1.7f};
+    for (int i = 1; i <= 3; i++) {
+        frame_of(cams, 5, newcomer, restart + i * 40000, &rng, 1.0);
+        assert_int_equal(mvt_tracker_step(&g_tracker2, &g_frame, &g_out), MVT_OK);
+    }
+    int found = 0;
+    for (int i = 0; i < g_out.num_tracks; i++) found += g_out.tracks[i].id == 5000;
+    assert_int_equal(found, 1);
+}
+
 static void test_mvt_tracker_step_hostile_detections_counted_not_fatal(void **state)
 {
     (void)state;
@@ -421,6 +529,7 @@ int main(void)
         cmocka_unit_test(test_mvt_tracker_step_straight_walk_pkf_tracked),
         cmocka_unit_test(test_mvt_tracker_step_straight_walk_kf_tracked),
         cmocka_unit_test(test_mvt_tracker_step_unseen_track_coasts_then_dies),
+        cmocka_unit_test(test_mvt_tracker_resume_continues_and_refuses_bad_state),
         cmocka_unit_test(test_mvt_tracker_step_hostile_detections_counted_not_fatal),
         cmocka_unit_test(test_mvt_tracker_init_bad_config_rejected),
     };

@@ -1,0 +1,232 @@
+/*
+ * mvt_persist.c - the trackers' persistent state: save, check and restore (a daemon's checkpoint),
+ * and the identity floor for a restart without one.
+ *
+ * A restored state must never be half loaded and never carry a value the filters would choke on
+ * (a checkpoint file is input like any other: its checksum catches accidents, not every bug that
+ * wrote it), so resume checks everything first and copies only then.
+ */
+#include <math.h>
+#include <string.h>
+
+#include "mvt_linalg.h"
+#include "mvt_pft.h"
+#include "mvt_tracker.h"
+
+static int status_ok(int32_t s)
+{
+    return s == MVT_TRACK_TENTATIVE || s == MVT_TRACK_CONFIRMED || s == MVT_TRACK_COASTING;
+}
+
+/* Finite, symmetric and positive definite (a Cholesky factor exists). */
+static int covariance_ok(const mvt_real P[36])
+{
+    mvt_real l[36];
+    if (!mvt_la_all_finite(P, 36)) {
+        return 0;
+    }
+    for (int i = 0; i < 6; i++) {
+        for (int j = 0; j < i; j++) {
+            const mvt_real a = P[i * 6 + j], b = P[j * 6 + i];
+            if (MVT_FABS(a - b) > MVT_R(1e-3) * (MVT_FABS(a) + MVT_FABS(b)) + MVT_R(1e-12)) {
+                return 0;
+            }
+        }
+    }
+    memcpy(l, P, sizeof(l));
+    return mvt_la_cholesky(6, l) == MVT_OK;
+}
+
+/* Time stamps may not lie after the state's clock, nor so far before it that the arithmetic of a
+ * time difference could overflow. */
+static int time_ok(int64_t t, int64_t now)
+{
+    return t <= now && t >= now - (INT64_C(1) << 60); /* now is in 0..2^61 */
+}
+
+static int ids_unique(const int32_t *ids, int n)
+{
+    for (int i = 0; i < n; i++) {
+        for (int j = i + 1; j < n && ids[i] != 0; j++) {
+            if (ids[i] == ids[j]) {
+                return 0;
+            }
+        }
+    }
+    return 1;
+}
+
+void mvt_tracker_save(const mvt_tracker_t *self, mvt_tracker_persist_t *out)
+{
+    MVT_ASSERT(self != NULL && out != NULL);
+    memset(out, 0, sizeof(*out));
+    memcpy(out->tracks, self->tracks, sizeof(out->tracks));
+    out->next_id = self->next_id;
+    out->have_time = self->have_time;
+    out->last_utime_us = self->last_utime_us;
+    out->counters = self->counters;
+}
+
+static int tracker_state_ok(const mvt_tracker_persist_t *p)
+{
+    if (p->next_id <= 0 || (p->have_time != 0 && p->have_time != 1) || p->last_utime_us < 0 ||
+        p->last_utime_us > (INT64_C(1) << 61)) {
+        return 0;
+    }
+    int32_t ids[MVT_MAX_TARGETS];
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        const mvt_track_t *tr = &p->tracks[t];
+        ids[t] = tr->id;
+        if (tr->id == 0) {
+            continue;
+        }
+        const int64_t now = p->last_utime_us;
+        if (tr->id < 0 || !p->have_time || !status_ok(tr->status) || !mvt_la_all_finite(tr->s.x, 6) ||
+            !covariance_ok(tr->s.P) || !time_ok(tr->s.utime_us, now) || !time_ok(tr->last_update_us, now) ||
+            !time_ok(tr->last_explained_us, now) || !time_ok(tr->last_consistent_us, now) || tr->misses < 0) {
+            return 0;
+        }
+    }
+    return ids_unique(ids, MVT_MAX_TARGETS);
+}
+
+static void shift_track_clocks(mvt_track_t *tracks, int64_t by_us)
+{
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        if (tracks[t].id != 0) {
+            tracks[t].last_update_us += by_us;
+            tracks[t].last_explained_us += by_us;
+            tracks[t].last_consistent_us += by_us;
+        }
+    }
+}
+
+static int unobserved_ok(int64_t unobserved_us)
+{
+    return unobserved_us >= 0 && unobserved_us < (INT64_C(1) << 60);
+}
+
+mvt_err_t mvt_tracker_resume(mvt_tracker_t *self, const mvt_tracker_persist_t *p, int64_t unobserved_us)
+{
+    MVT_ASSERT(self != NULL && p != NULL);
+    if (!unobserved_ok(unobserved_us) || !tracker_state_ok(p)) {
+        return MVT_ERR_INVALID;
+    }
+    memcpy(self->tracks, p->tracks, sizeof(self->tracks));
+    shift_track_clocks(self->tracks, unobserved_us);
+    self->next_id = p->next_id;
+    self->have_time = p->have_time;
+    self->last_utime_us = p->last_utime_us;
+    self->counters = p->counters;
+    return MVT_OK;
+}
+
+void mvt_tracker_reserve_ids(mvt_tracker_t *self, int32_t first)
+{
+    MVT_ASSERT(self != NULL);
+    if (first > self->next_id) {
+        self->next_id = first;
+    }
+}
+
+void mvt_pft_save(const mvt_pft_t *self, mvt_pft_persist_t *out)
+{
+    MVT_ASSERT(self != NULL && out != NULL);
+    memset(out, 0, sizeof(*out));
+    mvt_tracker_save(&self->det, &out->det);
+    memcpy(out->targets, self->targets, sizeof(out->targets));
+    out->next_id = self->next_id;
+    out->have_time = self->have_time;
+    out->last_utime_us = self->last_utime_us;
+    for (int r = 0; r < MVT_MAX_TARGETS; r++) {
+        out->lost[r].id = self->lost[r].id;
+        out->lost[r].blob_id = self->lost[r].blob_id;
+        out->lost[r].until_us = self->lost[r].until_us;
+    }
+    out->rng = self->rng;
+    out->counters = self->counters;
+}
+
+static int pool_ok(const mvt_pf_pool_t *pool, int n)
+{
+    if (pool->n != n) {
+        return 0;
+    }
+    mvt_real sum = MVT_R(0.0);
+    for (int i = 0; i < n; i++) {
+        const mvt_real v[9] = {pool->x[i], pool->y[i], pool->z[i], pool->vx[i], pool->vy[i],
+                               pool->vz[i], pool->h[i], pool->s[i], pool->w[i]};
+        if (!mvt_la_all_finite(v, 9) || !(pool->w[i] >= MVT_R(0.0))) {
+            return 0;
+        }
+        sum += pool->w[i];
+    }
+    return MVT_FABS(sum - MVT_R(1.0)) < MVT_R(1e-2); /* saved between frames: normalised weights */
+}
+
+static int pft_state_ok(const mvt_pft_t *self, const mvt_pft_persist_t *p)
+{
+    if (p->next_id <= 0 || (p->have_time != 0 && p->have_time != 1) || p->last_utime_us < 0 ||
+        p->last_utime_us > (INT64_C(1) << 61) || (p->rng.inc & 1u) == 0u) {
+        return 0; /* a PCG stream increment is odd */
+    }
+    int32_t ids[MVT_MAX_TARGETS];
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        const mvt_pft_target_t *a = &p->targets[t];
+        ids[t] = a->id;
+        if (a->id == 0) {
+            continue;
+        }
+        const int64_t now = p->last_utime_us;
+        if (a->id < 0 || !p->have_time || !status_ok(a->status) || a->supported_frames < 0 || a->blob_id < 0 ||
+            !time_ok(a->last_supported_us, now) || a->recover_until_us < 0 || a->recover_until_us > (INT64_C(1) << 61) ||
+            !mvt_la_all_finite(a->est.mean, 3) || !mvt_la_all_finite(a->est.vel, 3) || !isfinite(a->est.head_z) ||
+            !pool_ok(&a->pool, self->cfg.num_particles)) {
+            return 0;
+        }
+    }
+    for (int r = 0; r < MVT_MAX_TARGETS; r++) {
+        if (p->lost[r].id < 0 || p->lost[r].blob_id < 0 || p->lost[r].until_us < 0 ||
+            p->lost[r].until_us > (INT64_C(1) << 61)) {
+            return 0;
+        }
+    }
+    return ids_unique(ids, MVT_MAX_TARGETS);
+}
+
+mvt_err_t mvt_pft_resume(mvt_pft_t *self, const mvt_pft_persist_t *p, int64_t unobserved_us)
+{
+    MVT_ASSERT(self != NULL && p != NULL);
+    if (!unobserved_ok(unobserved_us) || !tracker_state_ok(&p->det) || !pft_state_ok(self, p)) {
+        return MVT_ERR_INVALID;
+    }
+    (void)mvt_tracker_resume(&self->det, &p->det, unobserved_us); /* checked above: cannot fail */
+    memcpy(self->targets, p->targets, sizeof(self->targets));
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        mvt_pft_target_t *a = &self->targets[t];
+        if (a->id != 0) {
+            a->last_supported_us += unobserved_us;
+            a->recover_until_us += a->recover_until_us != 0 ? unobserved_us : 0;
+        }
+    }
+    for (int r = 0; r < MVT_MAX_TARGETS; r++) {
+        self->lost[r].id = p->lost[r].id;
+        self->lost[r].blob_id = p->lost[r].blob_id;
+        self->lost[r].until_us = p->lost[r].until_us + (p->lost[r].id != 0 ? unobserved_us : 0);
+    }
+    self->next_id = p->next_id;
+    self->have_time = p->have_time;
+    self->last_utime_us = p->last_utime_us;
+    self->rng = p->rng;
+    self->counters = p->counters;
+    return MVT_OK;
+}
+
+void mvt_pft_reserve_ids(mvt_pft_t *self, int32_t first)
+{
+    MVT_ASSERT(self != NULL);
+    mvt_tracker_reserve_ids(&self->det, first);
+    if (first > self->next_id) {
+        self->next_id = first;
+    }
+}
