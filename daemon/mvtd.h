@@ -85,7 +85,7 @@ int mvtd_run(mvtd_t *d);
 /* One message as LCM would deliver it on channel (the handler of DETECTIONS_.*). */
 void mvtd_handle(mvtd_t *d, const char *channel, const void *data, uint32_t size);
 
-/* 0 when a camera_frame_t message's counts and string fit inside its size (see mvtd.c). */
+/* 0 when a camera_frame_t message's counts and string fit inside its size (see ingest.c). */
 int mvtd_frame_wire_check(const void *data, uint32_t size);
 
 /* Live mode housekeeping at wall time now: the open set's deadline, the status period. */

@@ -1,5 +1,6 @@
 /*
- * mvtrackd - multi-camera 3D people tracker daemon (CONTRACT section 3). The engine is mvtd.c;
+ * mvtrackd - multi-camera 3D people tracker daemon (CONTRACT section 3). The engine is mvtd.h
+ * (its files: engine.h);
  * this is its command-line entry point.
  */
 #include "mvtd.h"

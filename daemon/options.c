@@ -1,0 +1,329 @@
+/*
+ * options.c - mvtrackd's command line: --help, parsing, the rig and the tracker's configuration.
+ */
+#include "engine.h"
+
+#include <errno.h>
+#include <getopt.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static void usage(FILE *f)
+{
+    fprintf(f,
+            "usage: mvtrackd --rig RIG.yaml [--in URL] [--out URL] [--mode MODE] [options]\n"
+            "\n"
+            "Fuses per-camera detections (LCM channels DETECTIONS_<camera>, mvtrack.camera_frame_t)\n"
+            "into 3D tracks published on TRACKS (mvtrack.tracks_t) every frame set, and its health\n"
+            "on MVTRACK_STATUS (mvtrack.status_t) about once a second.\n"
+            "\n"
+            "  --rig FILE          camera rig, OpenCV FileStorage YAML (required)\n"
+            "  --in URL            LCM input (default %s);\n"
+            "                      'file://LOG.lcm?speed=0' processes a log as fast as possible and\n"
+            "                      exits 0 at its end\n"
+            "  --out URL           LCM output (default: the input URL; required for file:// input,\n"
+            "                      e.g. 'file://OUT.lcm?mode=w')\n"
+            "  --mode MODE         pkf (default): projective Kalman filter fusing every camera's pixels\n"
+            "                                     directly in 3D, linearised with the projection's\n"
+            "                                     Jacobian (the EKF form; measured best, see README)\n"
+            "                      ekf          same as pkf\n"
+            "                      pkf-paper    the paper's literal H (Eq. 18), OpenCV pixel origin\n"
+            "                      pkf-centred  Eq. 18 with pixels centred on the principal point\n"
+            "                      kf           baseline: triangulate per frame, then a 3D Kalman filter\n"
+            "                      pf           particle filter per person weighted by the cameras'\n"
+            "                                   foreground masks, and their hue/saturation when sent\n"
+            "                                   (MS+C; MS when a camera sends no colour); needs masks\n"
+            "                      pf-ms        the same, motion masks only (colour ignored)\n"
+            "  --particles N       pf: particles per person, 16..%d (default %d)\n"
+            "  --exclusion M       two people's heads are at least M metres apart horizontally\n"
+            "                      (default 0.5 in pf modes, 0.4 otherwise; 0 = off). pf: particles\n"
+            "                      closer to another person's centre are penalised, so two filters\n"
+            "                      cannot share one body (0: the paper's independent filters); other\n"
+            "                      modes: a track seen by fewer than two cameras is kept this far\n"
+            "                      from the others\n"
+            "  --occlusion box|off a confirmed track a camera did not update although it lies inside\n"
+            "                      the box of a blob given to another track is hidden there: box\n"
+            "                      (default) keeps it in the box's columns and alive; off: missed\n"
+            "  --particle-model column|point\n"
+            "                      pf: column (default): a particle is a head-top hypothesis, each\n"
+            "                      camera scores the body under it and the background above it;\n"
+            "                      point: the paper's, a particle is a point of the body\n"
+            "  --seed N            pf: random number seed (default 1); same seed, same output\n"
+            "  --publish-particles N\n"
+            "                      pf: publish N particles per person on MVTRACK_PARTICLES\n"
+            "                      (mvtrack.particles_t; default 0 = none)\n",
+            MVTD_DEFAULT_URL, MVT_MAX_PARTICLES, MVT_MAX_PARTICLES);
+    fprintf(f,
+            "  --gate chi2|paper   association gate: innovation chi-square (default) or the paper's\n"
+            "                      projected ellipsoid (Eq. 22-26)\n"
+            "  --gate-chi2 X       chi-square threshold, 2 dof (default 13.8)\n"
+            "  --q QX,QY,QZ        process noise, white-acceleration density m^2/s^3 per axis\n"
+            "                      (default 0.5,0.5,0.05; tools/mvtrack learn-q estimates it)\n"
+            "  --sigma-px X        pixel noise for cameras without sigma_px in the rig (default 2)\n"
+            "  --deadline-ms X     live mode: process an incomplete frame set this long after its\n"
+            "                      first message (default 20)\n"
+            "  --merge P           a detection inside the gates of two tracks that one camera cannot\n"
+            "                      tell apart (a merged blob): neither (default: update neither),\n"
+            "                      share (update both, covariance widened), off (one-to-one only),\n"
+            "                      top (the detector's rule: the higher head gets it when the order\n"
+            "                      is clear, otherwise neither)\n"
+            "  --verbose           print a line per status period\n"
+            "  --help              this text\n"
+            "\n"
+            "Exit status: 0 after SIGINT/SIGTERM or at the end of a file:// log; 2 on bad arguments\n"
+            "or rig; 1 when LCM cannot be opened.\n");
+}
+
+static int parse_q(const char *s, mvt_real q[3])
+{
+    double a, b, c;
+    char extra;
+    if (sscanf(s, "%lf,%lf,%lf%c", &a, &b, &c, &extra) != 3 || !(a > 0) || !(b > 0) || !(c > 0) || !isfinite(a) ||
+        !isfinite(b) || !isfinite(c)) {
+        return -1;
+    }
+    q[0] = (mvt_real)a;
+    q[1] = (mvt_real)b;
+    q[2] = (mvt_real)c;
+    return 0;
+}
+
+static int parse_pos(const char *s, double *out)
+{
+    char *end = NULL;
+    errno = 0;
+    const double v = strtod(s, &end);
+    if (errno != 0 || end == s || *end != '\0' || !(v > 0.0) || !isfinite(v)) {
+        return -1;
+    }
+    *out = v;
+    return 0;
+}
+
+/* Parses a positive option value; prints why not and returns -1 on failure. */
+static int option_pos(const char *opt_name, const char *arg, double *out)
+{
+    if (parse_pos(arg, out) != 0) {
+        fprintf(stderr, "mvtrackd: %s needs a positive number, got '%s'\n", opt_name, arg);
+        return -1;
+    }
+    return 0;
+}
+
+/* Parses an integer option in [lo, hi]; prints why not and returns -1 on failure. */
+static int option_int(const char *opt_name, const char *arg, long lo, long hi, long *out)
+{
+    char *end = NULL;
+    errno = 0;
+    const long v = strtol(arg, &end, 10);
+    if (errno != 0 || end == arg || *end != '\0' || v < lo || v > hi) {
+        fprintf(stderr, "mvtrackd: %s needs an integer in %ld..%ld, got '%s'\n", opt_name, lo, hi, arg);
+        return -1;
+    }
+    *out = v;
+    return 0;
+}
+
+/* Index of arg among names, or -1 after printing the allowed values. */
+static int option_choice(const char *opt_name, const char *arg, const char *const names[], int n)
+{
+    for (int i = 0; i < n; i++) {
+        if (strcmp(arg, names[i]) == 0) {
+            return i;
+        }
+    }
+    fprintf(stderr, "mvtrackd: unknown %s '%s' (", opt_name, arg);
+    for (int i = 0; i < n; i++) {
+        fprintf(stderr, "%s%s", i ? ", " : "", names[i]);
+    }
+    fprintf(stderr, ")\n");
+    return -1;
+}
+
+int mvtd_configure(mvtd_t *d, int argc, char **argv)
+{
+    const char *rig_path = NULL, *in_url = MVTD_DEFAULT_URL, *out_url = NULL, *mode = "pkf", *gate = "chi2",
+               *merge = "neither", *occlusion = "box", *particle_model = "column";
+    double sigma_px = 2.0, deadline_ms = 20.0, gate_chi2 = 13.8;
+    mvt_real q[3] = {MVT_R(0.5), MVT_R(0.5), MVT_R(0.05)};
+    static const struct option opts[] = {
+        {"rig", required_argument, 0, 'r'},      {"in", required_argument, 0, 'i'},
+        {"out", required_argument, 0, 'o'},      {"mode", required_argument, 0, 'm'},
+        {"gate", required_argument, 0, 'g'},     {"gate-chi2", required_argument, 0, 'c'},
+        {"q", required_argument, 0, 'q'},        {"sigma-px", required_argument, 0, 's'},
+        {"deadline-ms", required_argument, 0, 'd'}, {"verbose", no_argument, 0, 'v'},
+        {"merge", required_argument, 0, 'M'},    {"help", no_argument, 0, 'h'},
+        {"occlusion", required_argument, 0, 'O'},
+        {"particles", required_argument, 0, 'P'}, {"exclusion", required_argument, 0, 'X'},
+        {"seed", required_argument, 0, 'S'},     {"publish-particles", required_argument, 0, 'Q'},
+        {"particle-model", required_argument, 0, 'B'}, {0, 0, 0, 0}};
+    int opt;
+    optind = 1; /* callable more than once (tests, fuzzer) */
+    long particles = MVT_MAX_PARTICLES, seed = 1, publish_particles = 0;
+    double exclusion_m = -1.0; /* mode-dependent default */
+    while ((opt = getopt_long(argc, argv, "r:i:o:m:g:c:q:s:d:M:O:vhP:X:S:Q:B:", opts, NULL)) != -1) {
+        switch (opt) {
+        case 'r': rig_path = optarg; break;
+        case 'i': in_url = optarg; break;
+        case 'o': out_url = optarg; break;
+        case 'm': mode = optarg; break;
+        case 'g': gate = optarg; break;
+        case 'M': merge = optarg; break;
+        case 'O': occlusion = optarg; break;
+        case 'B': particle_model = optarg; break;
+        case 'c':
+            if (option_pos("--gate-chi2", optarg, &gate_chi2) != 0) {
+                return 2;
+            }
+            break;
+        case 'q':
+            if (parse_q(optarg, q) != 0) {
+                fprintf(stderr, "mvtrackd: --q needs three positive numbers QX,QY,QZ, got '%s'\n", optarg);
+                return 2;
+            }
+            break;
+        case 's':
+            if (option_pos("--sigma-px", optarg, &sigma_px) != 0) {
+                return 2;
+            }
+            break;
+        case 'd':
+            if (option_pos("--deadline-ms", optarg, &deadline_ms) != 0) {
+                return 2;
+            }
+            break;
+        case 'P':
+            if (option_int("--particles", optarg, 16, MVT_MAX_PARTICLES, &particles) != 0) {
+                return 2;
+            }
+            break;
+        case 'S':
+            if (option_int("--seed", optarg, 0, 2147483647L, &seed) != 0) {
+                return 2;
+            }
+            break;
+        case 'Q':
+            if (option_int("--publish-particles", optarg, 0, MVT_MAX_PARTICLES, &publish_particles) != 0) {
+                return 2;
+            }
+            break;
+        case 'X': {
+            char *end = NULL;
+            exclusion_m = strtod(optarg, &end);
+            if (end == optarg || *end != '\0' || !(exclusion_m >= 0.0) || exclusion_m > 10.0) {
+                fprintf(stderr, "mvtrackd: --exclusion needs metres in [0, 10], got '%s'\n", optarg);
+                return 2;
+            }
+            break;
+        }
+        case 'v': d->verbose = 1; break;
+        case 'h': usage(stdout); return 0;
+        default: usage(stderr); return 2;
+        }
+    }
+    if (optind < argc) {
+        fprintf(stderr, "mvtrackd: unexpected argument '%s'\n", argv[optind]);
+        usage(stderr);
+        return 2;
+    }
+    if (rig_path == NULL) {
+        fprintf(stderr, "mvtrackd: --rig is required\n");
+        usage(stderr);
+        return 2;
+    }
+    mvt_tracker_config_t cfg;
+    mvt_tracker_config_default(&cfg);
+    static const char *const modes[] = {"pkf", "ekf", "pkf-paper", "pkf-centred", "kf", "pf", "pf-ms"};
+    static const char *const gates[] = {"chi2", "paper"};
+    static const char *const merges[] = {"neither", "share", "off", "top"};
+    static const char *const particle_models[] = {"column", "point"};
+    const int mi = option_choice("--mode", mode, modes, 7);
+    const int gi = option_choice("--gate", gate, gates, 2);
+    const int ri = option_choice("--merge", merge, merges, 4);
+    const int bi = option_choice("--particle-model", particle_model, particle_models, 2);
+    static const char *const occlusions[] = {"box", "off"};
+    const int oi = option_choice("--occlusion", occlusion, occlusions, 2);
+    if (mi < 0 || gi < 0 || ri < 0 || bi < 0 || oi < 0) {
+        return 2;
+    }
+    static const mvt_pkf_lin_t mode_lin[] = {MVT_PKF_JACOBIAN, MVT_PKF_JACOBIAN, MVT_PKF_PAPER,
+                                             MVT_PKF_PAPER_CENTRED, MVT_PKF_JACOBIAN, MVT_PKF_JACOBIAN,
+                                             MVT_PKF_JACOBIAN};
+    cfg.lin = mode_lin[mi];
+    cfg.filter = mi == 4 ? MVT_FILTER_TRIANGULATE : MVT_FILTER_PROJECTIVE;
+    cfg.gate = gi == 0 ? MVT_GATE_CHI2 : MVT_GATE_PAPER;
+    static const mvt_merge_t merge_of[] = {MVT_MERGE_NEITHER, MVT_MERGE_SHARE, MVT_MERGE_OFF, MVT_MERGE_TOP};
+    cfg.merge = merge_of[ri];
+    cfg.gate_chi2 = (mvt_real)gate_chi2;
+    cfg.occlusion = oi == 0;
+    if (exclusion_m < 0.0) { /* measured defaults: docs/particle-filter.md, docs/tracking.md */
+        exclusion_m = mi >= 5 ? 0.5 : 0.4;
+    }
+    cfg.exclusion_m = (mvt_real)exclusion_m;
+    memcpy(cfg.q_m2s3, q, sizeof(q));
+    d->mode_name = mode;
+
+    char err[512];
+    if (mvtd_rig_load(rig_path, sigma_px, &d->rig, err, sizeof(err)) != 0) {
+        fprintf(stderr, "mvtrackd: %s\n", err);
+        return 2;
+    }
+    if (!d->rig.volume_given) {
+        fprintf(stderr, "mvtrackd: rig has no volume_min/volume_max; using the camera centres' box\n");
+    }
+    for (int i = 0; i < 3; i++) {
+        cfg.volume_min[i] = (mvt_real)d->rig.volume_min[i];
+        cfg.volume_max[i] = (mvt_real)d->rig.volume_max[i];
+    }
+    mvt_camera_t cams[MVT_MAX_CAMERAS];
+    for (int k = 0; k < d->rig.num_cameras; k++) {
+        if (mvt_cam_init(&cams[k], &d->rig.params[k]) != MVT_OK) {
+            fprintf(stderr, "mvtrackd: camera %s: invalid calibration\n", d->rig.names[k]);
+            return 2;
+        }
+    }
+    d->pf = mi >= 5;
+    d->publish_particles = (int)publish_particles;
+    d->trk = &d->tracker;
+    if (d->pf) {
+        static mvt_pft_t pft; /* ~1.5 MB at the default capacities: static, not on the stack */
+        mvt_pft_config_t pcfg;
+        mvt_pft_config_default(&pcfg);
+        pcfg.det = cfg;
+        /* the particle filter's blob tracker only proposes births: it keeps the lifecycle its
+         * figures were measured with (docs/particle-filter.md); exclusion is the particles' own */
+        pcfg.det.occlusion = 0;
+        pcfg.det.exclusion_m = 0;
+        pcfg.num_particles = (int)particles;
+        pcfg.use_colour = mi == 5;
+        pcfg.column = bi == 0;
+        pcfg.exclusion_m = (mvt_real)exclusion_m;
+        pcfg.seed = (uint64_t)seed;
+        if (mvt_pft_init(&pft, &pcfg, cams, d->rig.num_cameras) != MVT_OK) {
+            fprintf(stderr, "mvtrackd: invalid particle-filter configuration\n");
+            return 2;
+        }
+        d->pft = &pft;
+        d->trk = &pft.det;
+    } else if (mvt_tracker_init(&d->tracker, &cfg, cams, d->rig.num_cameras) != MVT_OK) {
+        fprintf(stderr, "mvtrackd: invalid tracker configuration\n");
+        return 2;
+    }
+    d->offline = strncmp(in_url, "file://", 7) == 0;
+    if (out_url == NULL) {
+        if (d->offline) {
+            fprintf(stderr, "mvtrackd: file:// input needs --out (a log opened for reading cannot publish)\n");
+            return 2;
+        }
+        out_url = in_url;
+    }
+    d->in_url = in_url;
+    d->out_url = out_url;
+    d->deadline_s = deadline_ms * 1e-3;
+    mvtd_asm_init(&d->assembler, d->rig.num_cameras, d->rig.frame_rate, mvtd_on_frame, d);
+    d->start_wall_s = mvtd_wall_s();
+    d->last_status_wall_s = d->start_wall_s;
+    return MVTD_CONTINUE;
+}
