@@ -97,8 +97,41 @@ int mvtd_frame_wire_check(const void *data, uint32_t size)
     return 0;
 }
 
+/* Admission (live only: a log is processed whole). A camera sends one message per frame; a channel
+ * that sends more than MVTD_FLOOD_FACTOR x the frame rate within one second of wall time is
+ * flooding (a detector in a loop, a replay at line rate, an attack): its messages beyond that are
+ * shed before any decoding, and all of them for every following second that is still over the
+ * bound. The camera then counts as down, so the frame sets of the others neither wait for it nor
+ * are split by its times; it is back one quiet second later. Costs O(cameras) string compares per
+ * message. Returns 1 to shed. */
+static int shed(mvtd_t *d, const char *channel, double now)
+{
+    int slot = d->rig.num_cameras; /* channels of no rig camera share one bound */
+    if (strncmp(channel, "DETECTIONS_", 11) == 0) {
+        const int k = mvtd_rig_find(&d->rig, channel + 11);
+        slot = k >= 0 ? k : slot;
+    }
+    const int32_t bound = (int32_t)(MVTD_FLOOD_FACTOR * d->rig.frame_rate + 0.5);
+    if (now - d->cam_window_s[slot] >= 1.0) {
+        d->cam_flooding[slot] = d->cam_window_n[slot] > bound;
+        d->cam_window_s[slot] = now;
+        d->cam_window_n[slot] = 0;
+    }
+    d->cam_window_n[slot] += d->cam_window_n[slot] < INT32_MAX;
+    if (!d->cam_flooding[slot] && d->cam_window_n[slot] <= bound) {
+        return 0;
+    }
+    d->cam_shed[slot]++;
+    mvtd_log(d, MVTD_LOG_SHED, "%s sends more than %d messages a second: shed (%lld so far)", channel, bound,
+             (long long)d->cam_shed[slot]);
+    return 1;
+}
+
 void mvtd_handle(mvtd_t *d, const char *channel, const void *data, uint32_t size)
 {
+    if (!d->offline && shed(d, channel, mvtd_wall_s())) {
+        return;
+    }
     mvtrack_camera_frame_t m;
     memset(&m, 0, sizeof(m));
     if (size > (uint32_t)INT32_MAX || mvtd_frame_wire_check(data, size) != 0 ||
@@ -138,6 +171,7 @@ void mvtd_handle(mvtd_t *d, const char *channel, const void *data, uint32_t size
         mvtrack_camera_frame_t_decode_cleanup(&m);
         return;
     }
+    mvtd_ckpt_first_message(d, m.utime); /* --state: restore or refuse, once */
     if (d->cam_messages[cam] > 0 && m.frame < d->cam_last_frame[cam]) {
         d->cam_counter_restarts[cam]++; /* harmless: frame sets are built from utime alone */
         mvtd_log(d, MVTD_LOG_CAMERA, "camera %s: frame counter went from %lld to %lld (restarted)",

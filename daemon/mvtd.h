@@ -7,6 +7,7 @@
 #ifndef MVTD_H
 #define MVTD_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #include <lcm/lcm.h>
@@ -21,17 +22,54 @@
 /* Detections of one message examined before the core chooses MVT_MAX_DETECTIONS of them. */
 #define MVTD_MAX_INPUT_DETECTIONS 4096
 #define MVTD_CONTINUE (-1)
+/* Live: a channel over this many times the frame rate within a second is shed (ingest.c). */
+#define MVTD_FLOOD_FACTOR 2.0
 /* Capture times accepted, microseconds: 0 .. 2^60 (about 36,000 years). */
 #define MVTD_MAX_UTIME (1LL << 60)
 
+/* Checkpoints (--state, checkpoint.c). */
+#define MVTD_CKPT_VERSION 1u
+#define MVTD_ID_BLOCK 4096                /* identities leased per write of FILE.ids */
+#define MVTD_ID_EPOCH_S 1700000000LL      /* live identities start above MVTD_ID_PER_S x (now - this) */
+#define MVTD_ID_PER_S 4
+#define MVTD_ID_FLOOR_MAX 0x60000000      /* 1.6e9: room for 5.3e8 more identities before INT32_MAX */
+
+typedef struct mvtd_ckpt_header {
+    char magic[8];                 /* "MVTCKPT" */
+    uint32_t version, endian, real_size;
+    uint32_t max_targets, max_particles, max_cameras, num_cameras, num_particles;
+    char mode[16];                 /* --mode */
+    uint64_t state_size;           /* sizeof mvt_tracker_persist_t or mvt_pft_persist_t */
+    uint64_t rig_hash;             /* FNV-1a 64 of the rig file's bytes */
+    int64_t capture_utime;         /* the last processed frame, cameras' clock */
+    int64_t asm_offset_us, asm_last_emitted_utime; /* the frame assembler's clock */
+    int32_t id_lease;              /* identities below this may have been published */
+    uint32_t state_crc;            /* CRC-32 of the state that follows the header */
+    uint32_t header_crc;           /* CRC-32 of the header up to this field */
+    uint32_t pad;
+} mvtd_ckpt_header_t;
+
 enum mvtd_log_class {
     MVTD_LOG_UNDECODABLE, MVTD_LOG_UNKNOWN_CAMERA, MVTD_LOG_BAD_VALUE, MVTD_LOG_CAPACITY, MVTD_LOG_TIME,
-    MVTD_LOG_TRACKER, MVTD_LOG_CAMERA, MVTD_LOG_NCLASS
+    MVTD_LOG_TRACKER, MVTD_LOG_CAMERA, MVTD_LOG_CHECKPOINT, MVTD_LOG_SHED, MVTD_LOG_NCLASS
 };
 
 typedef struct mvtd {
     const char *mode_name;
     const char *in_url, *out_url;
+    const char *rig_path;
+    const char *state_path;    /* --state FILE, or NULL */
+    uint64_t rig_hash;
+    int ckpt_pending;          /* a checkpoint read at start waits for the first message */
+    int32_t id_lease;          /* --state: identities below it are leased (FILE.ids) */
+    int64_t ckpt_failures, ckpt_skipped;
+    uint64_t ckpt_failed_seen;
+    char restore_note[320];    /* what happened to the checkpoint at start (status, stderr) */
+    /* admission (ingest.c): per camera, messages shed by the rate bound */
+    int64_t cam_shed[MVT_MAX_CAMERAS + 1]; /* [num_cameras]: channels of no rig camera */
+    double cam_window_s[MVT_MAX_CAMERAS + 1];
+    int32_t cam_window_n[MVT_MAX_CAMERAS + 1];
+    int32_t cam_flooding[MVT_MAX_CAMERAS + 1];
     double deadline_s;
     mvtd_rig_t rig;
     int pf;                    /* particle-filter mode: pft runs, tracker is unused */
@@ -95,5 +133,22 @@ void mvtd_tick(mvtd_t *d);
 void mvtd_finish(mvtd_t *d);
 
 void mvtd_publish_status(mvtd_t *d);
+
+/* --state FILE (checkpoint.c). mvtd_configure calls mvtd_ckpt_open: reads and checks the
+ * checkpoint and the identity lease, starts the writer. The first message of a rig camera decides
+ * whether the checkpoint is restored (mvtd_ckpt_first_message). */
+void mvtd_ckpt_open(mvtd_t *d);
+/* Checks a checkpoint file's bytes against this daemon (header, capacities, rig, mode, CRCs): 0 and
+ * the state kept for the first message, or -1 with the reason in why. Never touches the tracker. */
+int mvtd_ckpt_parse(mvtd_t *d, const void *data, size_t size, char *why, size_t why_n);
+void mvtd_ckpt_first_message(mvtd_t *d, int64_t utime);
+/* Before a frame's tracks are published: extends the identity lease when they reach it. */
+int mvtd_ckpt_ids(mvtd_t *d);
+/* Hands the current state to the writer thread (wait: until it is on disk). */
+void mvtd_ckpt_save(mvtd_t *d, int wait);
+void mvtd_ckpt_stats(mvtd_t *d, int64_t *written, int64_t *failed, float *age_s);
+/* Saves a last time, waits for the disk, stops the writer. */
+void mvtd_ckpt_close(mvtd_t *d);
+uint32_t mvtd_crc32(const void *data, size_t n);
 
 #endif /* MVTD_H */

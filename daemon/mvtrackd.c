@@ -1,7 +1,6 @@
 /*
- * mvtrackd - multi-camera 3D people tracker daemon (CONTRACT section 3). The engine is mvtd.h
- * (its files: engine.h);
- * this is its command-line entry point.
+ * mvtrackd - multi-camera 3D people tracker daemon (CONTRACT section 3). The engine's interface
+ * is mvtd.h (engine.h maps its files); this is its command-line entry point.
  */
 #include "mvtd.h"
 

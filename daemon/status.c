@@ -57,6 +57,7 @@ void mvtd_publish_status(mvtd_t *d)
         cams[k].went_down = (int32_t)d->assembler.counters.went_down[k];
         cams[k].came_back = (int32_t)d->assembler.counters.came_back[k];
         cams[k].counter_restarts = (int32_t)d->cam_counter_restarts[k];
+        cams[k].shed = d->cam_shed[k];
         d->cam_messages_at_last_status[k] = d->cam_messages[k];
     }
     st.rejected_undecodable = d->rej_undecodable;
@@ -131,6 +132,12 @@ void mvtd_publish_status(mvtd_t *d)
         st.deleted_duplicate = (int64_t)pc->deleted_duplicate;
         st.tracks_dropped_capacity = (int64_t)pc->births_refused_full;
     }
+    st.shed_other_channels = d->cam_shed[d->rig.num_cameras];
+    st.checkpoint_age_s = -1.0f;
+    if (d->state_path != NULL) {
+        mvtd_ckpt_stats(d, &st.checkpoints_written, &st.checkpoint_failures, &st.checkpoint_age_s);
+    }
+    st.restore = d->restore_note;
     PUBLISH(d, mvtrack_status_t, "MVTRACK_STATUS", &st);
     d->last_status_wall_s = now;
 }

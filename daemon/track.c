@@ -64,6 +64,7 @@ void mvtd_on_frame(void *ctx, mvt_frame_t *frame, int complete)
         mvtd_log(d, MVTD_LOG_TRACKER, "frame at utime %lld skipped: %s", (long long)frame->utime_us, mvt_err_str(err));
         return;
     }
+    (void)mvtd_ckpt_ids(d); /* identities leased on disk before they are published (--state) */
     mvtrack_track_t tracks[MVT_MAX_TARGETS];
     mvtrack_tracks_t msg;
     const int64_t capture_utime = d->output.utime_us - d->assembler.offset_us; /* the cameras' clock */
