@@ -85,7 +85,7 @@ static void usage(FILE *f)
     fprintf(f,
             "usage: mvtrack-soak --rig RIG.yaml [--frames N] [--window N] [--mode MODE] [--people N]\n"
             "                    [--rss-tolerance-kb K] [--max-trend X]\n"
-            "                    [--no-rss-check] [--quiet]\n"
+            "                    [--no-rss-check] [--quiet] [--state FILE]\n"
             "\n"
             "Feeds mvtrackd's engine N frame sets (default 2160000 = 24 h at 25 fps) of a changing\n"
             "population seen by every rig camera, offline, and prints RSS and per-frame time per\n"
@@ -93,12 +93,14 @@ static void usage(FILE *f)
             "RSS at the end is within K kB (default 1024) of the RSS after the first window and\n"
             "the least-squares trend of the windows' median frame time over the run is below X\n"
             "(default 0.10) of its mean; 1 otherwise; 2 on bad arguments.\n"
-            "--no-rss-check: for sanitizer builds, whose allocator keeps freed memory in quarantine.\n");
+            "--no-rss-check: for sanitizer builds, whose allocator keeps freed memory in quarantine.\n"
+            "--state FILE: checkpoints on, as mvtrackd --state FILE, one per simulated second (the\n"
+            "live daemon writes one per wall-clock second), by the same writer thread.\n");
 }
 
 int main(int argc, char **argv)
 {
-    const char *rig = NULL, *mode = "pkf";
+    const char *rig = NULL, *mode = "pkf", *state = NULL;
     long frames = 2160000, window = 90000, rss_tol_kb = 1024;
     int mean_people = 5, quiet = 0, rss_check = 1;
     double max_trend = 0.10;
@@ -119,6 +121,8 @@ int main(int argc, char **argv)
             rig = v, i++;
         } else if (strcmp(a, "--mode") == 0) {
             mode = v, i++;
+        } else if (strcmp(a, "--state") == 0) {
+            state = v, i++;
         } else if (strcmp(a, "--frames") == 0) {
             frames = strtol(v, NULL, 10), i++;
         } else if (strcmp(a, "--window") == 0) {
@@ -142,9 +146,9 @@ int main(int argc, char **argv)
         return 2;
     }
     char *dargv[] = {"mvtrackd", "--rig", (char *)rig, "--mode", (char *)mode, "--in", "file:///dev/null", "--out",
-                     "file:///dev/null", NULL};
+                     "file:///dev/null", "--state", (char *)state, NULL};
     mvtd_t *d = &g_d;
-    const int rc = mvtd_configure(d, 9, dargv);
+    const int rc = mvtd_configure(d, state != NULL ? 11 : 9, dargv);
     if (rc != MVTD_CONTINUE) {
         return 2;
     }
@@ -313,6 +317,7 @@ int main(int argc, char **argv)
         frame_ms[f % window] = (float)(frame_s * 1e3);
         if ((f + 1) % 25 == 0) {
             const double t0 = now_s();
+            mvtd_ckpt_save(d, 0); /* --state: handed to the writer thread (skipped while it writes) */
             if (t0 - d->last_status_wall_s >= 1.0) {
                 mvtd_publish_status(d); /* as the live daemon does once a second */
             }
@@ -354,6 +359,11 @@ int main(int argc, char **argv)
         fputc('\n', stderr);
     }
     mvtd_finish(d);
+    int64_t ck_written = 0, ck_failed = 0;
+    float ck_age = 0.0f;
+    if (state != NULL) {
+        mvtd_ckpt_stats(d, &ck_written, &ck_failed, &ck_age);
+    }
     /* trend of the median frame time: least squares over the windows after warm-up */
     double slope_rel = 0.0, mean_p50 = 0.0;
     const int w0 = nwin > 2 ? 1 : 0;
@@ -378,10 +388,11 @@ int main(int argc, char **argv)
            "\"rss_max_kb\": %ld, \"rss_growth_kb\": %ld, \"frame_ms_p50_mean\": %.4f, "
            "\"frame_ms_p50_trend_over_run\": %.4f, \"garbage_messages\": %lld, \"rejected_undecodable\": %lld, "
            "\"rejected_duplicate\": %lld, \"clock_jumps\": %llu, \"births\": %llu, \"wall_s\": %.1f, "
-           "\"rss_flat\": %s, \"time_flat\": %s}\n",
+           "\"checkpoints_written\": %lld, \"checkpoints_skipped\": %lld, \"rss_flat\": %s, \"time_flat\": %s}\n",
            frames, nwin, rss_warm, rss_end, rss_max, growth, mean_p50, slope_rel, (long long)garbage,
            (long long)d->rej_undecodable, (long long)d->rej_duplicate,
            (unsigned long long)d->assembler.counters.clock_jumps, (unsigned long long)d->trk->counters.births,
-           now_s() - t_start, rss_ok ? "true" : "false", time_ok ? "true" : "false");
+           now_s() - t_start, (long long)ck_written, (long long)d->ckpt_skipped, rss_ok ? "true" : "false",
+           time_ok ? "true" : "false");
     return rss_ok && time_ok ? 0 : 1;
 }

@@ -74,16 +74,28 @@ static struct {
     double last_ok_wall_s;
 } g_w = {.mu = PTHREAD_MUTEX_INITIALIZER, .cv = PTHREAD_COND_INITIALIZER};
 
-/* CRC-32 (IEEE 802.3, reflected, polynomial 0xEDB88320), bitwise: 1.2 MB a second is cheap. */
-uint32_t mvtd_crc32(const void *data, size_t n)
+static uint32_t g_crc_table[256];
+static pthread_once_t g_crc_once = PTHREAD_ONCE_INIT;
+
+static void crc_table_init(void)
 {
-    const uint8_t *p = data;
-    uint32_t c = 0xffffffffu;
-    for (size_t i = 0; i < n; i++) {
-        c ^= p[i];
+    for (uint32_t i = 0; i < 256; i++) {
+        uint32_t c = i;
         for (int k = 0; k < 8; k++) {
             c = (c >> 1) ^ (0xedb88320u & (0u - (c & 1u)));
         }
+        g_crc_table[i] = c;
+    }
+}
+
+/* CRC-32 (IEEE 802.3, reflected, polynomial 0xEDB88320; zlib's crc32), a byte at a time by table. */
+uint32_t mvtd_crc32(const void *data, size_t n)
+{
+    pthread_once(&g_crc_once, crc_table_init);
+    const uint8_t *p = data;
+    uint32_t c = 0xffffffffu;
+    for (size_t i = 0; i < n; i++) {
+        c = g_crc_table[(c ^ p[i]) & 0xffu] ^ (c >> 8);
     }
     return ~c;
 }
@@ -322,6 +334,8 @@ static void *writer_main(void *arg)
         }
         const size_t n = g_w.size;
         pthread_mutex_unlock(&g_w.mu);
+        g_out.h.state_crc = mvtd_crc32(&g_out.state, n - sizeof(g_out.h));
+        g_out.h.header_crc = header_crc(&g_out.h);
         const int rc = write_atomic(g_w.path, g_w.tmp, &g_out, n); /* g_out is ours while busy */
         const int e = errno;
         pthread_mutex_lock(&g_w.mu);
@@ -399,7 +413,7 @@ void mvtd_ckpt_open(mvtd_t *d)
         }
     }
     free(data);
-    if (!d->ckpt_pending) {
+    if (!d->ckpt_pending && !d->quiet) {
         fprintf(stderr, "mvtrackd: %s: %s\n", d->state_path, d->restore_note);
     }
     reserve_ids(d, first);
@@ -468,7 +482,9 @@ void mvtd_ckpt_first_message(mvtd_t *d, int64_t utime)
         snprintf(d->restore_note, sizeof(d->restore_note),
                  "restored %d tracks saved %.2f s of capture time before the first message", n, (double)age * 1e-6);
     }
-    fprintf(stderr, "mvtrackd: %s: %s\n", d->state_path, d->restore_note);
+    if (!d->quiet) {
+        fprintf(stderr, "mvtrackd: %s: %s\n", d->state_path != NULL ? d->state_path : "checkpoint", d->restore_note);
+    }
 }
 
 int mvtd_ckpt_ids(mvtd_t *d)
@@ -512,9 +528,7 @@ void mvtd_ckpt_save(mvtd_t *d, int wait)
     } else {
         mvt_tracker_save(&d->tracker, &g_out.state.trk);
     }
-    g_out.h.state_crc = mvtd_crc32(&g_out.state, state_size(d));
-    g_out.h.header_crc = header_crc(&g_out.h);
-    g_w.size = sizeof(g_out.h) + state_size(d);
+    g_w.size = sizeof(g_out.h) + state_size(d); /* the writer computes the CRCs */
     g_w.busy = 1;
     pthread_cond_broadcast(&g_w.cv);
     while (wait && g_w.busy) {

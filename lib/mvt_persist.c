@@ -13,6 +13,14 @@
 #include "mvt_pft.h"
 #include "mvt_tracker.h"
 
+/* Positions within the tracked volume widened by MVT_PERSIST_SLACK_M, speeds below
+ * MVT_PERSIST_MAX_SPEED: any tracker keeps its estimates far inside these (it deletes tracks that
+ * leave the volume plus a margin), while a value beyond them would overflow the integer pixel
+ * arithmetic downstream even though it is finite. */
+#define MVT_PERSIST_SLACK_M MVT_R(10.0)
+#define MVT_PERSIST_MAX_SPEED MVT_R(100.0)
+#define MVT_PERSIST_MAX_VAR MVT_R(1e6)
+
 static int status_ok(int32_t s)
 {
     return s == MVT_TRACK_TENTATIVE || s == MVT_TRACK_CONFIRMED || s == MVT_TRACK_COASTING;
@@ -33,6 +41,11 @@ static int covariance_ok(const mvt_real P[36])
             }
         }
     }
+    for (int i = 0; i < 6; i++) {
+        if (!(P[i * 7] <= MVT_PERSIST_MAX_VAR)) {
+            return 0;
+        }
+    }
     memcpy(l, P, sizeof(l));
     return mvt_la_cholesky(6, l) == MVT_OK;
 }
@@ -42,6 +55,17 @@ static int covariance_ok(const mvt_real P[36])
 static int time_ok(int64_t t, int64_t now)
 {
     return t <= now && t >= now - (INT64_C(1) << 60); /* now is in 0..2^61 */
+}
+
+static int place_ok(const mvt_tracker_config_t *c, const mvt_real pos[3], const mvt_real vel[3])
+{
+    for (int i = 0; i < 3; i++) {
+        if (!(pos[i] >= c->volume_min[i] - MVT_PERSIST_SLACK_M && pos[i] <= c->volume_max[i] + MVT_PERSIST_SLACK_M) ||
+            !(MVT_FABS(vel[i]) <= MVT_PERSIST_MAX_SPEED)) {
+            return 0;
+        }
+    }
+    return 1;
 }
 
 static int ids_unique(const int32_t *ids, int n)
@@ -67,7 +91,7 @@ void mvt_tracker_save(const mvt_tracker_t *self, mvt_tracker_persist_t *out)
     out->counters = self->counters;
 }
 
-static int tracker_state_ok(const mvt_tracker_persist_t *p)
+static int tracker_state_ok(const mvt_tracker_config_t *c, const mvt_tracker_persist_t *p)
 {
     if (p->next_id <= 0 || (p->have_time != 0 && p->have_time != 1) || p->last_utime_us < 0 ||
         p->last_utime_us > (INT64_C(1) << 61)) {
@@ -82,7 +106,7 @@ static int tracker_state_ok(const mvt_tracker_persist_t *p)
         }
         const int64_t now = p->last_utime_us;
         if (tr->id < 0 || !p->have_time || !status_ok(tr->status) || !mvt_la_all_finite(tr->s.x, 6) ||
-            !covariance_ok(tr->s.P) || !time_ok(tr->s.utime_us, now) || !time_ok(tr->last_update_us, now) ||
+            !covariance_ok(tr->s.P) || !place_ok(c, tr->s.x, tr->s.x + 3) || !time_ok(tr->s.utime_us, now) || !time_ok(tr->last_update_us, now) ||
             !time_ok(tr->last_explained_us, now) || !time_ok(tr->last_consistent_us, now) || tr->misses < 0) {
             return 0;
         }
@@ -109,7 +133,7 @@ static int unobserved_ok(int64_t unobserved_us)
 mvt_err_t mvt_tracker_resume(mvt_tracker_t *self, const mvt_tracker_persist_t *p, int64_t unobserved_us)
 {
     MVT_ASSERT(self != NULL && p != NULL);
-    if (!unobserved_ok(unobserved_us) || !tracker_state_ok(p)) {
+    if (!unobserved_ok(unobserved_us) || !tracker_state_ok(&self->cfg, p)) {
         return MVT_ERR_INVALID;
     }
     memcpy(self->tracks, p->tracks, sizeof(self->tracks));
@@ -147,7 +171,7 @@ void mvt_pft_save(const mvt_pft_t *self, mvt_pft_persist_t *out)
     out->counters = self->counters;
 }
 
-static int pool_ok(const mvt_pf_pool_t *pool, int n)
+static int pool_ok(const mvt_tracker_config_t *c, const mvt_pf_pool_t *pool, int n)
 {
     if (pool->n != n) {
         return 0;
@@ -156,7 +180,9 @@ static int pool_ok(const mvt_pf_pool_t *pool, int n)
     for (int i = 0; i < n; i++) {
         const mvt_real v[9] = {pool->x[i], pool->y[i], pool->z[i], pool->vx[i], pool->vy[i],
                                pool->vz[i], pool->h[i], pool->s[i], pool->w[i]};
-        if (!mvt_la_all_finite(v, 9) || !(pool->w[i] >= MVT_R(0.0))) {
+        if (!mvt_la_all_finite(v, 9) || !(pool->w[i] >= MVT_R(0.0)) || !place_ok(c, v, v + 3) ||
+            !(pool->h[i] >= MVT_R(0.0) && pool->h[i] <= MVT_R(1.0)) ||
+            !(pool->s[i] >= MVT_R(0.0) && pool->s[i] <= MVT_R(1.0))) {
             return 0;
         }
         sum += pool->w[i];
@@ -180,8 +206,10 @@ static int pft_state_ok(const mvt_pft_t *self, const mvt_pft_persist_t *p)
         const int64_t now = p->last_utime_us;
         if (a->id < 0 || !p->have_time || !status_ok(a->status) || a->supported_frames < 0 || a->blob_id < 0 ||
             !time_ok(a->last_supported_us, now) || a->recover_until_us < 0 || a->recover_until_us > (INT64_C(1) << 61) ||
-            !mvt_la_all_finite(a->est.mean, 3) || !mvt_la_all_finite(a->est.vel, 3) || !isfinite(a->est.head_z) ||
-            !pool_ok(&a->pool, self->cfg.num_particles)) {
+            !place_ok(&self->cfg.det, a->est.mean, a->est.vel) || !isfinite(a->est.head_z) ||
+            !(MVT_FABS(a->est.head_z) <= MVT_R(100.0)) || !place_ok(&self->cfg.det, a->est.box_min, a->est.vel) ||
+            !place_ok(&self->cfg.det, a->est.box_max, a->est.vel) || !mvt_la_all_finite(a->est.cov, 6) ||
+            !isfinite(a->est.hue) || !isfinite(a->est.saturation) || !pool_ok(&self->cfg.det, &a->pool, self->cfg.num_particles)) {
             return 0;
         }
     }
@@ -197,7 +225,7 @@ static int pft_state_ok(const mvt_pft_t *self, const mvt_pft_persist_t *p)
 mvt_err_t mvt_pft_resume(mvt_pft_t *self, const mvt_pft_persist_t *p, int64_t unobserved_us)
 {
     MVT_ASSERT(self != NULL && p != NULL);
-    if (!unobserved_ok(unobserved_us) || !tracker_state_ok(&p->det) || !pft_state_ok(self, p)) {
+    if (!unobserved_ok(unobserved_us) || !tracker_state_ok(&self->det.cfg, &p->det) || !pft_state_ok(self, p)) {
         return MVT_ERR_INVALID;
     }
     (void)mvt_tracker_resume(&self->det, &p->det, unobserved_us); /* checked above: cannot fail */

@@ -1,12 +1,14 @@
 """Fuzz the daemon's engine (message decoding + frame assembly + tracking) with libFuzzer.
 
-    tools/mvtrack fuzz [--seconds S | --runs N] [--jobs J] [--out DIR]
+    tools/mvtrack fuzz [--target messages|checkpoint] [--seconds S | --runs N] [--jobs J] [--out DIR]
 
-Writes a rig and a seed corpus of well-formed frame sets (people walking, masks with
-hue/saturation for the particle-filter mode) into DIR, then runs build-fuzz/bin/mvtrack-fuzz on
-it. Input format: tests/fuzz/fuzz_daemon.c. Prints the executions done and exits with the
-fuzzer's status (non-zero on a crash, leak, sanitizer report or broken invariant; the crashing
-input is left in DIR).
+Writes a rig and a seed corpus into DIR, then runs the libFuzzer target on it:
+- messages (default): build-fuzz/bin/mvtrack-fuzz, seeded with well-formed frame sets (people
+  walking, masks with hue/saturation for the particle-filter mode); tests/fuzz/fuzz_daemon.c;
+- checkpoint: build-fuzz/bin/mvtrack-fuzz-checkpoint, the --state loader, seeded with real
+  checkpoints that build/bin/mvtrackd writes on short scenes; tests/fuzz/fuzz_checkpoint.c.
+Prints the executions done and exits with the fuzzer's status (non-zero on a crash, leak,
+sanitizer report or broken invariant; the crashing input is left in DIR).
 """
 from __future__ import annotations
 
@@ -18,6 +20,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import lcm
 import numpy as np
 
 from .lcmio import camera_frame, mt
@@ -33,8 +36,15 @@ def record(msg_bytes: bytes, cam_index: int, raw: bool = False) -> bytes:
 
 
 def scene_seed(rig, rng: np.random.Generator, pf: bool) -> bytes:
-    frames = 3 if pf else 8
     out = bytearray([1 if pf else 0])
+    for k, msg in scene_messages(rig, rng, pf, 3 if pf else 8):
+        out += record(msg.encode(), k)
+    return bytes(out)
+
+
+def scene_messages(rig, rng: np.random.Generator, pf: bool, frames: int) -> list:
+    """(camera index, camera_frame_t) of 1-3 people walking, with painted masks in pf mode."""
+    out = []
     people = [np.array([rng.uniform(1, 5), rng.uniform(1, 4), rng.uniform(1.5, 1.9)]) for _ in range(rng.integers(1, 4))]
     vel = [rng.normal(0, 0.5, 3) * [1, 1, 0] for _ in people]
     t0 = int(rng.integers(0, 2**40))
@@ -57,9 +67,35 @@ def scene_seed(rig, rng: np.random.Generator, pf: bool) -> bytes:
                 msg.num_hs = mask.size
                 msg.hue = rng.integers(0, 256, mask.size, dtype=np.uint8).tobytes()
                 msg.saturation = rng.integers(0, 256, mask.size, dtype=np.uint8).tobytes()
-            out += record(msg.encode(), k)
+            out.append((k, msg))
         people = [p + v * 0.04 for p, v in zip(people, vel)]
-    return bytes(out)
+    return out
+
+
+def checkpoint_seeds(out: Path, rig_path: Path, rig, daemon: Path, n: int = 6, seed: int = 2) -> Path:
+    """Real checkpoints (daemon --state on short scenes, pkf and pf with 64 particles), each with a
+    flag byte in front (tests/fuzz/fuzz_checkpoint.c): the loader's fuzzing starts from files that
+    pass, so that its mutations reach every check. daemon: the mvtrackd of the fuzzing build (the
+    same capacities as the target, so the same state size)."""
+    corpus = out / "corpus-checkpoint"
+    corpus.mkdir(parents=True, exist_ok=True)
+    rng = np.random.default_rng(seed)
+    for i in range(n):
+        pf = i % 2 == 1
+        log = out / f"ckpt-scene-{i}.lcm"
+        w = lcm.EventLog(str(log), "w", overwrite=True)
+        for k, msg in scene_messages(rig, rng, pf, 40):
+            w.write_event(msg.utime, f"DETECTIONS_{rig.cameras[k].name}", msg.encode())
+        w.close()
+        state = out / f"ckpt-{i}"
+        for suffix in ("", ".ids"):
+            Path(f"{state}{suffix}").unlink(missing_ok=True)
+        subprocess.run([str(daemon), "--rig", str(rig_path), "--in", f"file://{log}?speed=0", "--out",
+                        f"file://{out}/ckpt-out.lcm?mode=w", "--mode", "pf" if pf else "pkf", "--particles", "64",
+                        "--state", str(state)], check=True, capture_output=True)
+        # flag bits 1 and 2: header and checksums fixed up by the target (the rig hash differs)
+        (corpus / f"ckpt-{i:02d}").write_bytes(bytes([int(pf) | 6 | (i << 3) & 0xf8]) + state.read_bytes())
+    return corpus
 
 
 def write_corpus(out: Path, n: int = 24, seed: int = 1) -> Path:
@@ -81,15 +117,25 @@ def main(argv=None) -> int:
     g.add_argument("--runs", type=int, help="stop after this many executions (e.g. 10000000)")
     ap.add_argument("--jobs", type=int, default=1, help="parallel fuzzing processes (default 1)")
     ap.add_argument("--out", type=Path, default=REPO / "out" / "fuzz", help="rig, corpus and crashes (default out/fuzz)")
-    ap.add_argument("--fuzzer", type=Path, default=REPO / "build-fuzz" / "bin" / "mvtrack-fuzz")
+    ap.add_argument("--target", choices=["messages", "checkpoint"], default="messages")
+    ap.add_argument("--fuzzer", type=Path, help="the libFuzzer binary (default: build-fuzz/bin/ of the target)")
     a = ap.parse_args(argv)
+    if a.fuzzer is None:
+        a.fuzzer = REPO / "build-fuzz" / "bin" / ("mvtrack-fuzz" if a.target == "messages" else "mvtrack-fuzz-checkpoint")
     if not a.fuzzer.exists():
         ap.error(f"{a.fuzzer} not built (tools/mvtrack fuzz builds it)")
     a.out.mkdir(parents=True, exist_ok=True)
     rig_path = write_corpus(a.out)
+    corpus, max_len = a.out / "corpus", 16384
+    if a.target == "checkpoint":
+        daemon = a.fuzzer.parent / "mvtrackd"
+        if not daemon.exists():
+            ap.error(f"{daemon} not built: it writes the seed checkpoints")
+        corpus = checkpoint_seeds(a.out, rig_path, smartroom(), daemon)
+        max_len = max(p.stat().st_size for p in corpus.iterdir())
     env = dict(os.environ, MVTRACK_FUZZ_RIG=str(rig_path),
                ASAN_OPTIONS="detect_leaks=1:allocator_may_return_null=0:abort_on_error=0")
-    args = [str(a.fuzzer), str(a.out / "corpus"), f"-artifact_prefix={a.out}/", "-max_len=16384",
+    args = [str(a.fuzzer), str(corpus), f"-artifact_prefix={a.out}/", f"-max_len={max_len}",
             "-rss_limit_mb=2048", "-print_final_stats=1"]
     if a.runs is not None:
         args.append(f"-runs={a.runs // max(a.jobs, 1)}")

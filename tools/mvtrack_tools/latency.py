@@ -1,6 +1,7 @@
 """Live latency and output rate of mvtrackd at 25 fps while cameras drop out and come back.
 
     tools/mvtrack latency [--seconds 120] [--people 5] [--drop-every 20] [--drop-for 4]
+                          [--flood-camera K --flood-factor F]
 
 Starts `mvtrackd` live on a private LCM multicast port (ttl=0), publishes every camera's
 detections of people walking the SmartRoom rig at the rig's frame rate (5 cameras, +-3 ms capture
@@ -9,6 +10,12 @@ seconds every --drop-every seconds. For every frame set it takes the wall time j
 camera message was published and the `publish_utime` the daemon stamped on that frame's TRACKS:
 the difference is the latency (same machine, same CLOCK_REALTIME). Prints p50/p99/p99.9/max, the
 TRACKS rate over 10-second windows, and writes out/latency/latency.json and latency.png.
+
+--flood-camera K: besides its own frames, camera K's channel carries F times its frame rate of
+extra messages (default F = 50) with plausible capture times (the current one) and random
+detections: a detector stuck in a loop, or someone replaying at line rate. The run then also
+reports the messages the daemon shed, and how well the people are tracked (share of true heads
+with a confirmed track within 0.3 m, mean error), to compare with a run without the flood.
 """
 from __future__ import annotations
 
@@ -57,6 +64,8 @@ def main(argv=None) -> int:
     ap.add_argument("--port", type=int, default=7600 + os.getpid() % 300, help="private multicast port")
     ap.add_argument("--out", type=Path, default=REPO / "out" / "latency")
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--flood-camera", type=int, default=-1, help="camera index whose channel floods (default none)")
+    ap.add_argument("--flood-factor", type=float, default=50.0, help="flood rate / frame rate (default 50)")
     a = ap.parse_args(argv)
     if not DAEMON.exists():
         ap.error(f"{DAEMON} not built (tools/mvtrack build)")
@@ -75,12 +84,14 @@ def main(argv=None) -> int:
     pub = lcm.LCM(url)
     sub = lcm.LCM(url)
     tracks: dict[int, tuple[int, float]] = {}   # frame utime -> (publish_utime, receive time)
+    positions: dict[int, list] = {}             # frame utime -> confirmed tracks' positions
     statuses = []
     stop = threading.Event()
 
     def on_tracks(_c, data):
         m = mt.tracks_t.decode(data)
         tracks[m.utime] = (m.publish_utime, time.time())
+        positions[m.utime] = [t.position for t in m.tracks if t.status != 1]
 
     def on_status(_c, data):
         statuses.append(mt.status_t.decode(data))
@@ -94,6 +105,27 @@ def main(argv=None) -> int:
 
     rx = threading.Thread(target=receive, daemon=True)
     rx.start()
+    flood_sent = [0]
+
+    def flood():
+        """F x the frame rate of extra messages on camera K's channel, in bursts every 4 ms."""
+        cam = rig.cameras[a.flood_camera]
+        frng = np.random.default_rng(a.seed + 99)
+        fl = lcm.LCM(url)
+        per_burst = max(1, int(round(a.flood_factor * rig.frame_rate * 0.004)))
+        t_next = time.monotonic()
+        while not stop.is_set():
+            for _ in range(per_burst):
+                u = int(time.time() * 1e6) - (int(time.time() * 1e6) - u0) % 1000  # a plausible capture time
+                dets = [(frng.uniform(0, cam.width), frng.uniform(0, cam.height)) for _ in range(3)]
+                fl.publish(f"DETECTIONS_{cam.name}", camera_frame(u, 0, cam, dets, 2.0).encode())
+                flood_sent[0] += 1
+            t_next += 0.004
+            delay = t_next - time.monotonic()
+            if delay > 0:
+                time.sleep(delay)
+
+    flooder = threading.Thread(target=flood, daemon=True) if a.flood_camera >= 0 else None
     time.sleep(0.7)  # the daemon subscribes
     sent_last: dict[int, float] = {}
     frame_utime: list[int] = []
@@ -101,6 +133,9 @@ def main(argv=None) -> int:
     t0 = time.monotonic()
     u0 = int(time.time() * 1e6)
     ncam = len(rig.cameras)
+    t_flood = time.time()
+    if flooder is not None:
+        flooder.start()
     try:
         for f in range(frames):
             t = f * period
@@ -151,6 +186,18 @@ def main(argv=None) -> int:
             matched_frames.append(i)
             rx_times.append(rx_t)
     lat_ms = np.array(lat) * 1e3
+    # tracking quality: true heads with a confirmed track within 0.3 m, and their error
+    hit, errs = 0, []
+    for u_t, i in zip([u for u in tk if abs(fu[int(np.argmin(np.abs(fu - u)))] - u) <= 10000], matched_frames):
+        if i < 25:
+            continue  # the first second: tracks are being confirmed
+        pos = np.array(positions.get(u_t, [])).reshape(-1, 3)
+        for head in people[i]:
+            d = np.linalg.norm(pos - head, axis=1) if len(pos) else np.array([np.inf])
+            if d.min() < 0.3:
+                hit += 1
+                errs.append(float(d.min()))
+    n_heads = sum(len(people[i]) for i in matched_frames if i >= 25)
     rx_times = np.array(sorted(rx_times))
     # output rate over 10 s windows, inside the run (first and last second left out)
     edges = np.arange(rx_times[0] + 1.0, rx_times[-1] - 1.0 - 10.0 + 1e-9, 10.0)
@@ -174,6 +221,12 @@ def main(argv=None) -> int:
         "daemon_status_went_down": [int(c.went_down) for c in statuses[-1].cameras] if statuses else None,
         "daemon_status_came_back": [int(c.came_back) for c in statuses[-1].cameras] if statuses else None,
         "seconds": a.seconds, "people": a.people, "mode": a.mode,
+        "heads_tracked_within_0.3m": hit / max(n_heads, 1),
+        "mean_error_mm": 1e3 * float(np.mean(errs)) if errs else None,
+        "flood_camera": a.flood_camera,
+        "flood_messages_sent": flood_sent[0],
+        "flood_rate_hz": flood_sent[0] / max(time.time() - t_flood, 1e-9) if a.flood_camera >= 0 else 0.0,
+        "shed_by_daemon": [int(c.shed) for c in statuses[-1].cameras] if statuses else None,
     }
     (a.out / "latency.json").write_text(json.dumps(res, indent=2))
     try:
@@ -197,8 +250,9 @@ def main(argv=None) -> int:
         print(f"latency: no plot ({e})", file=sys.stderr)
     for k, v in res.items():
         print(f"{k}: {v}")
-    ok = res["latency_ms_p99"] <= 2.0 and rates and min(rates) >= 24.5 and max(rates) <= 25.5
-    print("latency: " + ("PASS" if ok else "FAIL") + " (p99 <= 2 ms, every 10 s window 25 +- 0.5 Hz)")
+    bound_ms = 2.0 if a.flood_camera < 0 else 5.0
+    ok = res["latency_ms_p99"] <= bound_ms and rates and min(rates) >= 24.5 and max(rates) <= 25.5
+    print("latency: " + ("PASS" if ok else "FAIL") + f" (p99 <= {bound_ms:g} ms, every 10 s window 25 +- 0.5 Hz)")
     return 0 if ok else 1
 
 
