@@ -91,6 +91,20 @@ def test_pf_interaction_two_identities_deterministic(daemon_path, tmp_path):
     assert st.mode == "pf" and st.masks_decoded > 0 and st.masks_rejected == 0
     t = next(t for ts in tr.tracks.values() for t in ts if t.status == 2)
     assert 0.0 <= t.hue < 1.0 and 0.0 <= t.saturation <= 1.0  # MS+C estimates appearance
+    # --state: the log cut in two at frame 100, the second half restored from the first's checkpoint
+    # (particles, random stream, identities): the whole run's tracks, bit for bit
+    from mvtrack_tools.lcmio import split_log
+    from mvtrack_tools.simulate import T0_UTIME
+    split_log(log, tmp_path / "a.lcm", tmp_path / "b.lcm", T0_UTIME + 100 * 40000 - 20000, 0)
+    for half in ("a", "b"):
+        r = run(daemon_path, tmp_path / "rig.yaml", tmp_path / f"{half}.lcm", tmp_path / f"{half}_out.lcm", "--mode",
+                "pf", "--particles", "500", "--state", str(tmp_path / "state"))
+    assert "restored 2 tracks" in r.stderr, r.stderr
+    second = read_log(str(tmp_path / "b_out.lcm"), lambda c: c == "TRACKS").tracks
+    assert len(second) >= 95
+    for u, ts in second.items():
+        assert [(t.id, tuple(t.position), tuple(t.extent_max)) for t in ts] == \
+               [(t.id, tuple(t.position), tuple(t.extent_max)) for t in tr.tracks[u]]
 
 
 @pytest.mark.daemon

@@ -7,36 +7,17 @@ import struct
 import subprocess
 from pathlib import Path
 
-import lcm
 import numpy as np
 import pytest
 
 from mvtrack_tools import restart
-from mvtrack_tools.lcmio import LogWriter, mt, read_log
+from mvtrack_tools.lcmio import LogWriter, read_log, split_log
 from mvtrack_tools.rig import smartroom
 from mvtrack_tools.simulate import T0_UTIME, build_multi, write_multi
 
 pytestmark = pytest.mark.daemon
 
 HEADER = struct.Struct("<8s8I16sQQqqqiIII")  # mvtd_ckpt_header_t (daemon/mvtd.h), x86-64
-
-
-def split_log(src: Path, a: Path, b: Path, cut_us: int, gap_us: int) -> None:
-    """Events before cut_us into a, events from cut_us + gap_us on into b (by capture time)."""
-    wa, wb = lcm.EventLog(str(a), "w", overwrite=True), lcm.EventLog(str(b), "w", overwrite=True)
-    for ev in lcm.EventLog(str(src), "r"):
-        if ev.channel.startswith("DETECTIONS_"):
-            u = mt.camera_frame_t.decode(ev.data).utime
-        elif ev.channel == "GROUND_TRUTH":
-            u = mt.ground_truth_t.decode(ev.data).utime
-        else:
-            continue
-        if u < cut_us:
-            wa.write_event(ev.timestamp, ev.channel, ev.data)
-        elif u >= cut_us + gap_us:
-            wb.write_event(ev.timestamp, ev.channel, ev.data)
-    wa.close()
-    wb.close()
 
 
 def run(daemon: Path, rig: Path, log: Path, out: Path, *args: str) -> subprocess.CompletedProcess:

@@ -114,3 +114,23 @@ def read_log(path: str, want: Callable[[str], bool] | None = None) -> TrackLog:
         elif ch == "MVTRACK_STATUS":
             out.status.append(mt.status_t.decode(ev.data))
     return out
+
+
+def split_log(src, a, b, cut_us: int, gap_us: int) -> None:
+    """A scene log in two: events captured before cut_us into a, from cut_us + gap_us on into b
+    (capture time: a camera message's utime, ground truth's utime; other channels are left out).
+    A restart of the daemon between the two halves is then a restart with gap_us unobserved."""
+    wa, wb = lcm.EventLog(str(a), "w", overwrite=True), lcm.EventLog(str(b), "w", overwrite=True)
+    for ev in lcm.EventLog(str(src), "r"):
+        if ev.channel.startswith("DETECTIONS_"):
+            u = mt.camera_frame_t.decode(ev.data).utime
+        elif ev.channel == "GROUND_TRUTH":
+            u = mt.ground_truth_t.decode(ev.data).utime
+        else:
+            continue
+        if u < cut_us:
+            wa.write_event(ev.timestamp, ev.channel, ev.data)
+        elif u >= cut_us + gap_us:
+            wb.write_event(ev.timestamp, ev.channel, ev.data)
+    wa.close()
+    wb.close()
