@@ -210,13 +210,22 @@ int mvtd_ckpt_parse(mvtd_t *d, const void *data, size_t size, char *why, size_t 
         snprintf(why, why_n, "state checksum wrong (corrupted)");
         return -1;
     }
+    /* the clocks: capture time = assembler time - offset, and the tracker's clock is the time of the
+     * last frame set the assembler emitted (every difference then stays far from int64 overflow) */
     if (h.capture_utime < 0 || h.capture_utime > MVTD_MAX_UTIME || h.asm_offset_us < -MVTD_MAX_UTIME ||
-        h.asm_offset_us > MVTD_MAX_UTIME || h.id_lease <= 0) {
+        h.asm_offset_us > MVTD_MAX_UTIME || h.asm_last_emitted_utime < 0 ||
+        h.asm_last_emitted_utime > 2 * MVTD_MAX_UTIME || h.asm_last_emitted_utime - h.asm_offset_us != h.capture_utime ||
+        h.id_lease <= 0) {
         snprintf(why, why_n, "times or identity lease out of range");
         return -1;
     }
     g_loaded.h = h;
     memcpy(&g_loaded.state, (const uint8_t *)data + sizeof(h), n);
+    const int64_t clock = d->pf ? g_loaded.state.pft.last_utime_us : g_loaded.state.trk.last_utime_us;
+    if (clock != h.asm_last_emitted_utime || (d->pf && g_loaded.state.pft.det.last_utime_us != clock)) {
+        snprintf(why, why_n, "the tracker's clock disagrees with the frame assembler's");
+        return -1;
+    }
     d->ckpt_pending = 1;
     return 0;
 }

@@ -50,11 +50,11 @@ static int covariance_ok(const mvt_real P[36])
     return mvt_la_cholesky(6, l) == MVT_OK;
 }
 
-/* Time stamps may not lie after the state's clock, nor so far before it that the arithmetic of a
- * time difference could overflow. */
+/* Time stamps may not lie after the state's clock, nor before 0 (tracker time starts at a message
+ * time >= 0 and only grows), nor so far before it that a time difference could overflow. */
 static int time_ok(int64_t t, int64_t now)
 {
-    return t <= now && t >= now - (INT64_C(1) << 60); /* now is in 0..2^61 */
+    return t >= 0 && t <= now && t >= now - (INT64_C(1) << 60); /* now is in 0..2^61 */
 }
 
 static int place_ok(const mvt_tracker_config_t *c, const mvt_real pos[3], const mvt_real vel[3])
