@@ -153,6 +153,7 @@ int main(int argc, char **argv)
         return 2;
     }
     d->quiet = 1; /* the engine's bounded stderr lines would interleave with the report */
+    quiet |= !isatty(2); /* the progress bar redraws with carriage returns: only on a terminal */
     const int nc = d->rig.num_cameras;
     static mvt_camera_t cams[MVT_MAX_CAMERAS];
     for (int k = 0; k < nc; k++) {
