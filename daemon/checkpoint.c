@@ -1,11 +1,11 @@
 /*
  * checkpoint.c - --state FILE: the tracker survives the daemon's restart.
  *
- * Saving. About once a second (the status period, live) and at shutdown, the tracker's persistent
- * state (mvt_tracker_save / mvt_pft_save: tracks, particles, identities, clock, counters) and the
- * frame assembler's clock go to FILE: written to FILE.tmp by a writer thread (fsync can take
- * tens of milliseconds; the frame loop never waits for the disk), fsync'ed, renamed over FILE, the
- * directory fsync'ed. A crash at any moment leaves the previous checkpoint or the new one, whole.
+ * Saving. Live, every MVTD_CKPT_FRAMES frame sets (0.2 s; 1 s in pf modes) and at shutdown, the
+ * tracker's persistent state (mvt_tracker_save / mvt_pft_save: tracks, particles, identities,
+ * clock, counters) and the frame assembler's clock go to FILE: written to FILE.tmp by a writer
+ * thread (fsync can take tens of milliseconds; the frame loop never waits for the disk), fsync'ed,
+ * renamed over FILE, the directory fsync'ed. Offline, at the end of the log only. A crash at any moment leaves the previous checkpoint or the new one, whole.
  * Nothing is saved before the first frame of a run: a daemon restarted with no camera sending
  * must not replace a good checkpoint with an empty one.
  *

@@ -73,9 +73,6 @@ void mvtd_tick(mvtd_t *d)
         mvtd_asm_poll(&d->assembler, mvtd_wall_s(), d->deadline_s);
     }
     if (mvtd_wall_s() - d->last_status_wall_s >= 1.0) {
-        if (!d->offline) {
-            mvtd_ckpt_save(d, 0); /* about once a second; the writer thread takes it to disk */
-        }
         mvtd_publish_status(d);
         if (d->verbose) {
             fprintf(stderr, "mvtrackd: %lld frames, %lld complete, %lld partial\n", (long long)d->frames_processed,

@@ -96,6 +96,9 @@ void mvtd_on_frame(void *ctx, mvt_frame_t *frame, int complete)
         publish_particles(d, capture_utime);
     }
     d->frames_processed++;
+    if (!d->offline && d->frames_processed % (d->pf ? MVTD_CKPT_FRAMES_PF : MVTD_CKPT_FRAMES) == 0) {
+        mvtd_ckpt_save(d, 0); /* --state: handed to the writer thread, which takes it to disk */
+    }
     const double t1 = mvtd_wall_s();
     const int slot = d->n_proc % MVTD_PROC_RING;
     d->proc_ms[slot] = (float)((t1 - t0) * 1e3);

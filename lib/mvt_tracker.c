@@ -317,6 +317,7 @@ mvt_err_t mvt_tracker_step(mvt_tracker_t *self, const mvt_frame_t *frame, mvt_ou
         self->tracks[t].cameras_empty = 0u;
     }
 
+    mvt_trk_reacquire(self, frame, order, n_order);
     if (self->cfg.filter == MVT_FILTER_PROJECTIVE) {
         step_projective(self, frame, order, n_order);
     } else {

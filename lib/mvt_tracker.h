@@ -216,6 +216,8 @@ typedef struct mvt_counters {
     uint64_t exclusion_updates;       /* poorly seen tracks pushed out to exclusion_m from a seen one */
     uint64_t births_refuted;          /* birth candidates refused: views that should see them show
                                          their place empty (p_detect) */
+    uint64_t reacquired;              /* tracks lost for a while whose detections were chosen jointly
+                                         in 3D (mvt_trk_reacquire) */
 } mvt_counters_t;
 
 typedef struct mvt_track {
@@ -278,6 +280,14 @@ typedef struct mvt_tracker {
     mvt_assoc_ws_t assoc_ws;
     mvt_birth_cand_t cand[MVT_MAX_BIRTH_CANDIDATES];
     int num_cand;
+    int count_candidates;                  /* this collection counts dropped candidates */
+    /* re-acquisition (mvt_trk_reacquire): the detection camera k must give track t, or -1 */
+    int16_t reacq_det[MVT_MAX_TARGETS][MVT_MAX_CAMERAS];
+    uint8_t reacq_any;                     /* some track holds a reservation this frame */
+    uint8_t claimed[MVT_MAX_CAMERAS][MVT_MAX_DETECTIONS];
+    int16_t rq_cand[MVT_MAX_DETECTIONS];   /* distinct candidates: index into cand */
+    mvt_real rq_x[MVT_MAX_DETECTIONS][3];
+    mvt_real rq_cov[MVT_MAX_DETECTIONS][9];
     /* per camera this frame (mvt_trk_evidence_weights): */
     uint8_t ev_boxes[MVT_MAX_CAMERAS];     /* the view sends boxes */
     mvt_real ev_support[MVT_MAX_CAMERAS];  /* log-likelihood ratio of a detection at the place */

@@ -68,6 +68,19 @@ void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us);
  * observed cameras. O(C^2 D^2) cheap epipolar tests + O(candidates * C * D). */
 void mvt_trk_initiate(mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order);
 
+/* Multi-view candidates from the free detections of this frame (>= birth_min_views views, birth
+ * odds >= 1) into self->cand, best first (most views, then least reprojection error). count: 1
+ * to count refuted and dropped candidates (births), 0 not to (a second look in the same frame). */
+void mvt_trk_candidates(mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order, int count);
+
+/* A candidate's point: robust triangulation (>= birth_min_views inliers, inside the volume) and
+ * its first-order covariance; inliers: bit i for cand->cam[i]. 1 on success. */
+int mvt_trk_cand_point(mvt_tracker_t *self, const mvt_birth_cand_t *cand, mvt_real x[3], mvt_real cov[9],
+                       uint32_t *inliers);
+
+/* Re-acquisition before the per-camera association (mvt_trk_reacq.c). O(C^2 D^2 + T^2 (T + D)). */
+void mvt_trk_reacquire(mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order);
+
 /* The track's position is within the volume extended by volume_margin_m. */
 int mvt_trk_inside_volume(const mvt_tracker_config_t *c, const mvt_real x[3]);
 

@@ -174,6 +174,28 @@ static void hypothesise(mvt_tracker_t *self, int k, const int live[], int n_live
             self->counters.gated_out++;
         }
     }
+    if (!self->reacq_any) {
+        return;
+    }
+    /* re-acquisition (mvt_trk_reacquire): a reserved detection is its track's only choice here,
+     * and no other track's */
+    for (int i = 0; i < n_live; i++) {
+        const int t = live[i];
+        const int r = self->reacq_det[t][k];
+        if (r < 0) {
+            continue;
+        }
+        for (int d = 0; d < nd; d++) {
+            if (d != r) {
+                self->cost[t][d] = MVT_R(-1.0);
+            }
+        }
+        for (int j = 0; j < n_live; j++) {
+            if (live[j] != t) {
+                self->cost[live[j]][r] = MVT_R(-1.0);
+            }
+        }
+    }
 }
 
 /* Solves one cluster (tracks with root r) with the Hungarian method. */

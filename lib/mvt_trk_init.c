@@ -48,7 +48,7 @@ static void add_candidate(mvt_tracker_t *self, const mvt_birth_cand_t *c)
             worst = i;
         }
     }
-    self->counters.birth_candidates_dropped++;
+    self->counters.birth_candidates_dropped += (uint64_t)self->count_candidates;
     if (better(c, &self->cand[worst])) {
         self->cand[worst] = *c;
     }
@@ -138,7 +138,8 @@ static int birth_odds_ok(const mvt_tracker_t *self, const mvt_birth_cand_t *cand
     return mvt_trk_odds(self, support, cand->empty) >= MVT_R(0.0);
 }
 
-static void collect_candidates(mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order)
+static void collect_candidates(mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order,
+                               int count)
 {
     const mvt_tracker_config_t *c = &self->cfg;
     self->num_cand = 0;
@@ -196,7 +197,7 @@ static void collect_candidates(mvt_tracker_t *self, const mvt_frame_t *frame, co
                         continue;
                     }
                     if (!birth_odds_ok(self, &cand)) {
-                        self->counters.births_refuted++;
+                        self->counters.births_refuted += (uint64_t)count;
                         continue;
                     }
                     add_candidate(self, &cand);
@@ -225,31 +226,19 @@ static int near_existing_track(const mvt_tracker_t *self, const mvt_real x[3])
 static void birth(mvt_tracker_t *self, const mvt_frame_t *frame, const mvt_birth_cand_t *cand)
 {
     const mvt_tracker_config_t *c = &self->cfg;
-    mvt_tri_obs_t obs[MVT_MAX_CAMERAS];
     for (int i = 0; i < cand->n; i++) {
-        const mvt_pkf_meas_t *m = &self->meas[cand->cam[i]][cand->det[i]];
-        obs[i] = (mvt_tri_obs_t){cand->cam[i], {m->xn[0], m->xn[1]}, m->var_px2};
         self->used[cand->cam[i]][cand->det[i]] = 1; /* consumed whatever happens next */
     }
     mvt_real x[3], cov[9];
     uint32_t inl = 0;
-    int m = 0;
-    const mvt_real thr = birth_threshold(c, &self->meas[cand->cam[0]][cand->det[0]]);
-    if (mvt_tri_robust(self->cams, obs, cand->n, thr, x, &inl, &m) != MVT_OK || m < c->birth_min_views ||
-        !mvt_trk_inside_volume(c, x) || near_existing_track(self, x)) {
+    if (!mvt_trk_cand_point(self, cand, x, cov, &inl) || near_existing_track(self, x)) {
         return;
     }
-    mvt_tri_obs_t in[MVT_MAX_CAMERAS];
     uint32_t bits = 0;
-    int mi = 0;
     for (int i = 0; i < cand->n; i++) {
         if (inl & (1u << i)) {
-            in[mi++] = obs[i];
-            bits |= 1u << obs[i].cam;
+            bits |= 1u << cand->cam[i];
         }
-    }
-    if (mvt_tri_covariance(self->cams, in, mi, x, cov) != MVT_OK) {
-        return;
     }
     int slot = -1;
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
@@ -278,9 +267,10 @@ static void birth(mvt_tracker_t *self, const mvt_frame_t *frame, const mvt_birth
     self->counters.births++;
 }
 
-void mvt_trk_initiate(mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order)
+void mvt_trk_candidates(mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order, int count)
 {
-    collect_candidates(self, frame, order, n_order);
+    self->count_candidates = count;
+    collect_candidates(self, frame, order, n_order, count);
     /* best first (insertion sort: stable, bounded by MVT_MAX_BIRTH_CANDIDATES) */
     for (int i = 1; i < self->num_cand; i++) {
         const mvt_birth_cand_t key = self->cand[i];
@@ -291,6 +281,36 @@ void mvt_trk_initiate(mvt_tracker_t *self, const mvt_frame_t *frame, const int o
         }
         self->cand[j + 1] = key;
     }
+}
+
+int mvt_trk_cand_point(mvt_tracker_t *self, const mvt_birth_cand_t *cand, mvt_real x[3], mvt_real cov[9],
+                       uint32_t *inliers)
+{
+    const mvt_tracker_config_t *c = &self->cfg;
+    mvt_tri_obs_t obs[MVT_MAX_CAMERAS];
+    for (int i = 0; i < cand->n; i++) {
+        const mvt_pkf_meas_t *m = &self->meas[cand->cam[i]][cand->det[i]];
+        obs[i] = (mvt_tri_obs_t){cand->cam[i], {m->xn[0], m->xn[1]}, m->var_px2};
+    }
+    int m = 0;
+    const mvt_real thr = birth_threshold(c, &self->meas[cand->cam[0]][cand->det[0]]);
+    if (mvt_tri_robust(self->cams, obs, cand->n, thr, x, inliers, &m) != MVT_OK || m < c->birth_min_views ||
+        !mvt_trk_inside_volume(c, x)) {
+        return 0;
+    }
+    mvt_tri_obs_t in[MVT_MAX_CAMERAS];
+    int mi = 0;
+    for (int i = 0; i < cand->n; i++) {
+        if (*inliers & (1u << i)) {
+            in[mi++] = obs[i];
+        }
+    }
+    return mvt_tri_covariance(self->cams, in, mi, x, cov) == MVT_OK;
+}
+
+void mvt_trk_initiate(mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order)
+{
+    mvt_trk_candidates(self, frame, order, n_order, 1);
     for (int i = 0; i < self->num_cand; i++) {
         const mvt_birth_cand_t *cand = &self->cand[i];
         int free_all = 1;

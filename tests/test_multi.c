@@ -186,6 +186,45 @@ static void test_mvt_tracker_step_two_people_crossing_keep_identities(void **sta
     assert_int_equal(g_tracker.counters.births, 2);
 }
 
+/* Two people walk toward each other (a short one and a tall one), stop, and nobody sees them for
+ * 1 s (cameras report nothing): each track's constant-velocity prediction lands on the other
+ * person. When they are seen again, the ceiling camera, which cannot tell heights, reports first.
+ * The joint re-acquisition (mvt_trk_reacquire) gives each track its own person by height, which
+ * it does not let the prediction over the gap blur. */
+static void test_mvt_tracker_step_lost_tracks_reacquired_by_height(void **state)
+{
+    (void)state;
+    init();
+    test_rng_t rng = {11};
+    int64_t t = 1000000;
+    mvt_real X[2][3];
+    for (int f = 0; f < 40; f++, t += 40000) {
+        const mvt_real s = (mvt_real)(f * 0.04);
+        const mvt_real A[3] = {2.2f + 0.5f * s, 2.4f, 1.55f}, B[3] = {4.2f - 0.5f * s, 2.6f, 1.85f};
+        memcpy(X[0], A, sizeof(A));
+        memcpy(X[1], B, sizeof(B));
+        frame_of((const mvt_real(*)[3])X, 2, t, &rng, 1.0, 0);
+        assert_int_equal(mvt_tracker_step(&g_tracker, &g_frame, &g_out), MVT_OK);
+    }
+    const int32_t id_a = id_near(X[0]), id_b = id_near(X[1]);
+    assert_true(id_a > 0 && id_b > 0 && id_a != id_b);
+    for (int f = 0; f < 25; f++, t += 40000) { /* they stop; the cameras see nobody */
+        empty_frame(t);
+        assert_int_equal(mvt_tracker_step(&g_tracker, &g_frame, &g_out), MVT_OK);
+    }
+    const uint64_t before = g_tracker.counters.reacquired;
+    for (int f = 0; f < 10; f++, t += 40000) {
+        frame_of((const mvt_real(*)[3])X, 2, t, &rng, 1.0, 0);
+        g_frame.views[4].utime_us = t - 5000; /* the ceiling camera, blind to heights, reports first */
+        assert_int_equal(mvt_tracker_step(&g_tracker, &g_frame, &g_out), MVT_OK);
+    }
+    if (id_near(X[0]) != id_a || id_near(X[1]) != id_b) {
+        fail_msg("after the gap: short person has %d (was %d), tall person %d (was %d)", (int)id_near(X[0]), (int)id_a,
+                 (int)id_near(X[1]), (int)id_b);
+    }
+    assert_true(g_tracker.counters.reacquired > before);
+}
+
 static void test_mvt_tracker_step_false_alarm_flood_confirmed_tracks_survive(void **state)
 {
     (void)state;
@@ -532,6 +571,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_mvt_tracker_step_two_people_crossing_keep_identities),
+        cmocka_unit_test(test_mvt_tracker_step_lost_tracks_reacquired_by_height),
         cmocka_unit_test(test_mvt_tracker_step_false_alarm_flood_confirmed_tracks_survive),
         cmocka_unit_test(test_mvt_tracker_step_more_people_than_capacity_births_refused_counted),
         cmocka_unit_test(test_mvt_tracker_step_person_returns_new_identity),

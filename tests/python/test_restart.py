@@ -157,3 +157,16 @@ def test_state_live_restart_keeps_identities_never_reuses(tmp_path, daemon_path,
         assert r["kept"] == r["present"], r
         assert "restored" in r["restore_line"], r
         assert r["resume_ms_from_ready"] is not None and r["resume_ms_from_ready"] < 80.0, r
+
+
+def test_state_outage_identities_over_30_scenes(tmp_path, daemon_path):
+    """5 people walking a 6 x 5 m room, the log cut at 6 s and 1.5 s of it removed (an outage the
+    restarted daemon did not see), 30 seeds (tools/mvtrack restart --offline 30 --down 1.5).
+    Measured: 123 of 144 people keep their identity and 6 identities go to another person (2 of
+    them the scenes' own switches, as without a cut); before the re-acquisition by height
+    (mvt_trk_reacquire) 104 and 21. The bar sits between the two."""
+    kept = present = reused = 0
+    for seed in range(1, 31):
+        r = restart.offline(seed, 1.5, 6.0, 14.0, tmp_path)
+        kept, present, reused = kept + r["kept"], present + r["present"], reused + len(r["reused"])
+    assert kept >= 0.8 * present and reused <= 10, (kept, present, reused)

@@ -75,6 +75,44 @@ def match(truth: np.ndarray, tracks, max_d: float = 0.5) -> dict[int, int]:
     return out
 
 
+def score(before: list, after: list, people: np.ndarray, frame_of_utime: dict, f_restart: int):
+    """Identities across the stop: (kept, last_before, first_after, reused_by_other, ids_before,
+    ids_after) from the TRACKS messages before the stop and after the restart."""
+    # identities before the stop: id -> the person it was matched to most often
+    votes: dict[int, dict[int, int]] = {}
+    ids_before: set[int] = set()
+    for m in before:
+        f = frame_of_utime.get(m.utime)
+        ids_before.update(t.id for t in m.tracks)
+        if f is None:
+            continue
+        for tid, i in match(people[f], m.tracks).items():
+            votes.setdefault(tid, {}).setdefault(i, 0)
+            votes[tid][i] += 1
+    owner = {tid: max(v, key=v.get) for tid, v in votes.items()}
+    last_before = {}
+    for m in before[-5:]:
+        f = frame_of_utime.get(m.utime)
+        if f is not None:
+            last_before = {i: tid for tid, i in match(people[f], m.tracks).items()}
+    # after the restart: the identity each person carries in the first second
+    first_after: dict[int, int] = {}
+    reused_by_other = set()
+    ids_after: set[int] = set()
+    for m in after:
+        f = frame_of_utime.get(m.utime)
+        ids_after.update(tr.id for tr in m.tracks)
+        if f is None:
+            continue
+        for tid, i in match(people[f], m.tracks).items():
+            if f <= f_restart + 25:
+                first_after.setdefault(i, tid)
+            if tid in owner and owner[tid] != i:
+                reused_by_other.add(tid)
+    kept = sum(1 for i, tid in last_before.items() if first_after.get(i) == tid)
+    return kept, last_before, first_after, reused_by_other, ids_before, ids_after
+
+
 def run(how: str, seconds: float, at: float, down: float, mode: str, out: Path, seed: int, port: int) -> dict:
     out.mkdir(parents=True, exist_ok=True)
     url = f"udpm://239.255.76.67:{port}?ttl=0&recv_buf_size=4194304"
@@ -137,38 +175,8 @@ def run(how: str, seconds: float, at: float, down: float, mode: str, out: Path, 
 
     before = [(t, m) for t, m in got if t < t0 + f_stop * period]
     after = [(t, m) for t, m in got if d2 is not None and t >= t_exec]
-    # identities before the stop: id -> the person it was matched to most often
-    votes: dict[int, dict[int, int]] = {}
-    ids_before: set[int] = set()
-    for _, m in before:
-        f = frame_of_utime.get(m.utime)
-        ids_before.update(t.id for t in m.tracks)
-        if f is None:
-            continue
-        for tid, i in match(people[f], m.tracks).items():
-            votes.setdefault(tid, {}).setdefault(i, 0)
-            votes[tid][i] += 1
-    owner = {tid: max(v, key=v.get) for tid, v in votes.items()}
-    last_before = {}
-    for _, m in before[-5:]:
-        f = frame_of_utime.get(m.utime)
-        if f is not None:
-            last_before = {i: tid for tid, i in match(people[f], m.tracks).items()}
-    # after the restart: the identity each person carries in the first second
-    first_after: dict[int, int] = {}
-    reused_by_other = set()
-    ids_after: set[int] = set()
-    for t, m in after:
-        f = frame_of_utime.get(m.utime)
-        ids_after.update(tr.id for tr in m.tracks)
-        if f is None:
-            continue
-        for tid, i in match(people[f], m.tracks).items():
-            if f <= f_restart + 25:
-                first_after.setdefault(i, tid)
-            if tid in owner and owner[tid] != i:
-                reused_by_other.add(tid)
-    kept = sum(1 for i, tid in last_before.items() if first_after.get(i) == tid)
+    kept, last_before, first_after, reused_by_other, ids_before, ids_after = score(
+        [m for _, m in before], [m for _, m in after], people, frame_of_utime, f_restart)
     res = {
         "how": how, "mode": mode, "down_s": down,
         "present": len(last_before),
@@ -183,11 +191,67 @@ def run(how: str, seconds: float, at: float, down: float, mode: str, out: Path, 
                                                                         or "no checkpoint" in ln)), None),
         "first_id_after": min(ids_after) if ids_after else None,
     }
+    if os.environ.get("MVTRACK_RESTART_DEBUG"):
+        res["debug_last_before"] = {int(i): int(t) for i, t in last_before.items()}
+        res["debug_first_after"] = {int(i): int(t) for i, t in first_after.items()}
+        res["debug_after"] = [(frame_of_utime.get(m.utime), [(t.id, t.status, [round(x, 2) for x in t.position])
+                                                            for t in m.tracks]) for _, m in after[:12:3]]
+        res["debug_people"] = [[round(x, 2) for x in p] for p in people[f_restart + 1]]
     if how in ("nostate", "nofiles"):
         # nothing restored: every identity after the restart must be new
         res["new_ids_that_existed_before"] = sorted(ids_after & ids_before)
     (out / f"{how}.json").write_text(json.dumps(res, indent=2))
     return res
+
+
+def offline(seed: int, gap_s: float, at: float, seconds: float, out: Path, mode: str = "pkf") -> dict:
+    """The same scene as a log, cut at `at` with gap_s of it removed, the daemon run on each half
+    with --state: deterministic, for comparing versions over many seeds and gaps."""
+    import lcm as _lcm
+    from .lcmio import read_log, split_log
+    out.mkdir(parents=True, exist_ok=True)
+    rig = smartroom()
+    rig_path = out / "rig.yaml"
+    rig.write(rig_path)
+    period = 1.0 / rig.frame_rate
+    frames = int(seconds / period)
+    rng = np.random.default_rng(seed)
+    people = walkers(rng, 5, frames, period, rig.volume_min, rig.volume_max)
+    u0 = 1_700_000_000_000_000
+    log = out / f"scene-{seed}.lcm"
+    w = _lcm.EventLog(str(log), "w", overwrite=True)
+    frame_of_utime = {}
+    for f in range(frames):
+        u = u0 + int(round(f * period * 1e6))
+        frame_of_utime[u] = f
+        for k in rng.permutation(len(rig.cameras)):
+            cam = rig.cameras[k]
+            uv = cam.project(people[f])
+            dets = [(x + rng.normal(0, 2.0), y + rng.normal(0, 2.0)) for x, y in uv
+                    if 0 <= x < cam.width and 0 <= y < cam.height and rng.random() > 0.05]
+            w.write_event(u, f"DETECTIONS_{cam.name}", camera_frame(u, f, cam, dets, 2.0).encode())
+    w.close()
+    f_stop = int(at / period)
+    f_restart = f_stop + int(round(gap_s / period))
+    a, b = out / f"a-{seed}.lcm", out / f"b-{seed}.lcm"
+    split_log(log, a, b, u0 + int(round((f_stop - 0.5) * period * 1e6)), int(round(gap_s * 1e6)))
+    state = out / f"state-{seed}"
+    for suffix in ("", ".ids"):
+        Path(f"{state}{suffix}").unlink(missing_ok=True)
+    msgs = []
+    for half in (a, b):
+        o = half.with_suffix(".out.lcm")
+        subprocess.run([str(DAEMON), "--rig", str(rig_path), "--in", f"file://{half}?speed=0", "--out",
+                        f"file://{o}?mode=w", "--mode", mode, "--state", str(state)], check=True, capture_output=True)
+        tl = read_log(str(o), lambda c: c == "TRACKS").tracks
+        msgs.append([_Tracks(u, tl[u]) for u in sorted(tl)])
+    kept, last_before, _, reused, _, _ = score(msgs[0], msgs[1], people, frame_of_utime, f_restart)
+    return {"seed": seed, "gap_s": gap_s, "present": len(last_before), "kept": kept, "reused": sorted(reused)}
+
+
+class _Tracks:
+    def __init__(self, utime, tracks):
+        self.utime, self.tracks = utime, tracks
 
 
 def main(argv=None) -> int:
@@ -200,9 +264,21 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--port", type=int, default=7300 + os.getpid() % 200, help="private multicast port")
     ap.add_argument("--out", type=Path, default=REPO / "out" / "restart")
+    ap.add_argument("--offline", type=int, metavar="SEEDS",
+                    help="instead of live: the scene as a log cut in two, --down s removed, over SEEDS seeds "
+                         "(deterministic: compares versions)")
     a = ap.parse_args(argv)
     if not DAEMON.exists():
         ap.error(f"{DAEMON} not built (tools/mvtrack build)")
+    if a.offline:
+        tot_p = tot_k = tot_r = 0
+        for seed in range(1, a.offline + 1):
+            r = offline(seed, a.down, a.at, a.seconds, a.out / "offline", a.mode)
+            print(json.dumps(r))
+            tot_p, tot_k, tot_r = tot_p + r["present"], tot_k + r["kept"], tot_r + len(r["reused"])
+        print(f"restart --offline: {tot_k} of {tot_p} people kept their identity over {a.down:g} s, "
+              f"{tot_r} identities given to another person", file=sys.stderr)
+        return 0 if tot_k == tot_p and tot_r == 0 else 1
     hows = ["kill", "term", "nostate", "nofiles"] if a.how == "all" else [a.how]
     ok = True
     for how in hows:
