@@ -110,6 +110,7 @@ void mvtd_publish_status(mvtd_t *d)
     st.updates_merged_top = (int64_t)c->merged_top;
     st.deleted_occluded = (int64_t)c->deleted_occluded;
     st.deleted_contradicted = (int64_t)c->deleted_contradicted;
+    st.tracks_reacquired = (int64_t)c->reacquired;
     st.masks_decoded = d->masks_decoded;
     st.masks_rejected = d->masks_rejected;
     if (d->pf) {
