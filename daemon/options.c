@@ -69,7 +69,7 @@ static void usage(FILE *f)
             "                      share (update both, covariance widened), off (one-to-one only),\n"
             "                      top (the detector's rule: the higher head gets it when the order\n"
             "                      is clear, otherwise neither)\n"
-            "  --state FILE        save the tracker to FILE about once a second and at exit\n"
+            "  --state FILE        save the tracker to FILE every 0.2 s (1 s in pf modes) and at exit\n"
             "                      (atomically: FILE.tmp, fsync, rename) and restore it at start when\n"
             "                      it matches this build, rig and mode and the first camera message is\n"
             "                      at most 2 s (coast_max_s) after it: people keep their identities\n"
