@@ -138,8 +138,7 @@ static void reserve_ids(mvtd_t *d, int32_t first)
     }
 }
 
-/* The header this daemon would write (and accepts), without times, lease and CRCs. */
-static void expected_header(const mvtd_t *d, mvtd_ckpt_header_t *h)
+void mvtd_ckpt_expected_header(const mvtd_t *d, mvtd_ckpt_header_t *h)
 {
     memset(h, 0, sizeof(*h));
     memcpy(h->magic, CKPT_MAGIC, sizeof(CKPT_MAGIC));
@@ -164,7 +163,7 @@ static uint32_t header_crc(const mvtd_ckpt_header_t *h)
 int mvtd_ckpt_parse(mvtd_t *d, const void *data, size_t size, char *why, size_t why_n)
 {
     mvtd_ckpt_header_t want, h;
-    expected_header(d, &want);
+    mvtd_ckpt_expected_header(d, &want);
     if (size < sizeof(h)) {
         snprintf(why, why_n, "%zu bytes, shorter than its header (truncated?)", size);
         return -1;
@@ -527,7 +526,7 @@ void mvtd_ckpt_save(mvtd_t *d, int wait)
         pthread_mutex_unlock(&g_w.mu);
         return;
     }
-    expected_header(d, &g_out.h);
+    mvtd_ckpt_expected_header(d, &g_out.h);
     g_out.h.capture_utime = d->assembler.last_emitted_utime - d->assembler.offset_us;
     g_out.h.asm_offset_us = d->assembler.offset_us;
     g_out.h.asm_last_emitted_utime = d->assembler.last_emitted_utime;

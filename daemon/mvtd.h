@@ -147,6 +147,8 @@ void mvtd_ckpt_open(mvtd_t *d);
  * the state kept for the first message, or -1 with the reason in why. Never touches the tracker. */
 int mvtd_ckpt_parse(mvtd_t *d, const void *data, size_t size, char *why, size_t why_n);
 void mvtd_ckpt_first_message(mvtd_t *d, int64_t utime);
+/* The header this daemon writes and accepts: times, lease and CRCs zero. */
+void mvtd_ckpt_expected_header(const mvtd_t *d, mvtd_ckpt_header_t *h);
 /* Before a frame's tracks are published: extends the identity lease when they reach it. */
 int mvtd_ckpt_ids(mvtd_t *d);
 /* Hands the current state to the writer thread (wait: until it is on disk). */

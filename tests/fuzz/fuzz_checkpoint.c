@@ -17,6 +17,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "fuzz_engine.h"
 #include "mvtd.h"
 #include "mvtrack_camera_frame_t.h"
 
@@ -28,28 +29,13 @@ static uint8_t g_file[sizeof(mvtd_ckpt_header_t) + sizeof(mvt_pft_persist_t) + 6
 int LLVMFuzzerInitialize(int *argc, char ***argv);
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
-static void configure(mvtd_t *d, const char *mode)
-{
-    const char *rig = getenv("MVTRACK_FUZZ_RIG");
-    if (rig == NULL) {
-        fprintf(stderr, "fuzz_checkpoint: set MVTRACK_FUZZ_RIG to a rig file\n");
-        abort();
-    }
-    char *argv[] = {"mvtrackd", "--rig", (char *)rig, "--mode", (char *)mode, "--particles", "64", "--in",
-                    "file:///dev/null", "--out", "file:///dev/null", NULL};
-    if (mvtd_configure(d, 11, argv) != MVTD_CONTINUE) {
-        abort();
-    }
-    d->quiet = 1;
-    d->rig_hash = 0x5eed5eed5eed5eedull; /* what bit 1 writes into the header */
-}
-
 int LLVMFuzzerInitialize(int *argc, char ***argv)
 {
     (void)argc;
     (void)argv;
-    configure(&g_pkf, "pkf");
-    configure(&g_pf, "pf");
+    fuzz_configure(&g_pkf, "pkf");
+    fuzz_configure(&g_pf, "pf");
+    g_pkf.rig_hash = g_pf.rig_hash = 0x5eed5eed5eed5eedull; /* what bit 1 writes into the header */
     g_pkf0 = g_pkf;
     g_pf0 = g_pf;
     g_pft0 = *g_pf.pft;
@@ -57,21 +43,18 @@ int LLVMFuzzerInitialize(int *argc, char ***argv)
     return 0;
 }
 
-static void fix_header(const mvtd_t *d, mvtd_ckpt_header_t *h, size_t state_size)
+/* The fields that identify this daemon, as it would write them; times, lease and CRCs kept. */
+static void fix_header(const mvtd_t *d, mvtd_ckpt_header_t *h)
 {
-    memcpy(h->magic, "MVTCKPT", 8);
-    h->version = MVTD_CKPT_VERSION;
-    h->endian = 0x01020304u;
-    h->real_size = (uint32_t)sizeof(mvt_real);
-    h->max_targets = MVT_MAX_TARGETS;
-    h->max_particles = MVT_MAX_PARTICLES;
-    h->max_cameras = MVT_MAX_CAMERAS;
-    h->num_cameras = (uint32_t)d->rig.num_cameras;
-    h->num_particles = d->pf ? (uint32_t)d->pft->cfg.num_particles : 0u;
-    memset(h->mode, 0, sizeof(h->mode));
-    snprintf(h->mode, sizeof(h->mode), "%s", d->mode_name);
-    h->state_size = state_size;
-    h->rig_hash = d->rig_hash;
+    mvtd_ckpt_header_t want;
+    mvtd_ckpt_expected_header(d, &want);
+    want.capture_utime = h->capture_utime;
+    want.asm_offset_us = h->asm_offset_us;
+    want.asm_last_emitted_utime = h->asm_last_emitted_utime;
+    want.id_lease = h->id_lease;
+    want.state_crc = h->state_crc;
+    want.header_crc = h->header_crc;
+    *h = want;
 }
 
 /* One frame set: every camera reports one detection near the image centre at utime. */
@@ -105,28 +88,6 @@ static void frame_set(mvtd_t *d, int64_t utime)
     }
 }
 
-static void check_output(const mvtd_t *d)
-{
-    const mvt_output_t *o = &d->output;
-    if (o->num_tracks < 0 || o->num_tracks > MVT_MAX_TARGETS) {
-        abort();
-    }
-    for (int i = 0; i < o->num_tracks; i++) {
-        const mvt_track_out_t *t = &o->tracks[i];
-        for (int a = 0; a < 3; a++) {
-            if (!isfinite(t->pos_m[a]) || !isfinite(t->vel_ms[a]) || !isfinite(t->extent_min[a]) ||
-                !isfinite(t->extent_max[a])) {
-                abort();
-            }
-        }
-        for (int a = 0; a < 6; a++) {
-            if (!isfinite(t->cov_m2[a])) {
-                abort();
-            }
-        }
-    }
-}
-
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     if (!g_ready || size < 1) {
@@ -149,7 +110,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (n >= hs && (data[0] & 6u) != 0u) {
         memcpy(&h, g_file, hs);
         if (data[0] & 2u) {
-            fix_header(d, &h, ss);
+            fix_header(d, &h);
         }
         if (data[0] & 4u) {
             h.state_crc = mvtd_crc32(g_file + hs, n >= hs + ss ? ss : n - hs);
@@ -194,7 +155,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     }
     for (int f = 0; f < 3; f++) {
         frame_set(d, first + f * 40000);
-        check_output(d);
+        fuzz_check_output(d);
     }
     return 0;
 }

@@ -17,6 +17,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "fuzz_engine.h"
 #include "mvtd.h"
 #include "mvtrack_camera_frame_t.h"
 
@@ -26,52 +27,14 @@ static int g_ready;
 int LLVMFuzzerInitialize(int *argc, char ***argv);
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
-static void configure(mvtd_t *d, const char *mode)
-{
-    const char *rig = getenv("MVTRACK_FUZZ_RIG");
-    if (rig == NULL) {
-        fprintf(stderr, "fuzz_daemon: set MVTRACK_FUZZ_RIG to a rig file\n");
-        abort();
-    }
-    char *argv[] = {"mvtrackd", "--rig", (char *)rig, "--mode", (char *)mode, "--particles", "64", "--in",
-                    "file:///dev/null", "--out", "file:///dev/null", NULL};
-    if (mvtd_configure(d, 11, argv) != MVTD_CONTINUE) {
-        abort();
-    }
-    d->quiet = 1;
-}
-
 int LLVMFuzzerInitialize(int *argc, char ***argv)
 {
     (void)argc;
     (void)argv;
-    configure(&g_pkf, "pkf");
-    configure(&g_pf, "pf");
+    fuzz_configure(&g_pkf, "pkf");
+    fuzz_configure(&g_pf, "pf");
     g_ready = 1;
     return 0;
-}
-
-static void check_output(const mvtd_t *d)
-{
-    const mvt_output_t *o = &d->output;
-    if (o->num_tracks < 0 || o->num_tracks > MVT_MAX_TARGETS) {
-        abort();
-    }
-    for (int i = 0; i < o->num_tracks; i++) {
-        const mvt_track_out_t *t = &o->tracks[i];
-        for (int a = 0; a < 3; a++) {
-            if (!isfinite(t->pos_m[a]) || !isfinite(t->vel_ms[a]) || !isfinite(t->extent_min[a]) ||
-                !isfinite(t->extent_max[a])) {
-                fprintf(stderr, "fuzz_daemon: track %d has a non-finite output\n", (int)t->id);
-                abort();
-            }
-        }
-        for (int a = 0; a < 6; a++) {
-            if (!isfinite(t->cov_m2[a])) {
-                abort();
-            }
-        }
-    }
 }
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
@@ -119,7 +82,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         const int64_t before = d->frames_processed;
         mvtd_handle(d, channel, msg, (uint32_t)len);
         if (d->frames_processed != before) {
-            check_output(d);
+            fuzz_check_output(d);
         }
     }
     return 0;

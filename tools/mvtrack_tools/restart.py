@@ -59,6 +59,19 @@ def start_daemon(rig_path: Path, url: str, state: Path, mode: str):
     return p, t_exec, t_ready[0], lines
 
 
+def frame_messages(rig, heads: np.ndarray, f: int, u: int, rng: np.random.Generator) -> list[tuple[str, bytes]]:
+    """Frame f's camera messages, cameras in a random order: the heads projected, 2 px noise, 5 %
+    misses."""
+    out = []
+    for k in rng.permutation(len(rig.cameras)):
+        cam = rig.cameras[k]
+        uv = cam.project(heads)
+        dets = [(x + rng.normal(0, 2.0), y + rng.normal(0, 2.0)) for x, y in uv
+                if 0 <= x < cam.width and 0 <= y < cam.height and rng.random() > 0.05]
+        out.append((f"DETECTIONS_{cam.name}", camera_frame(u, f, cam, dets, 2.0).encode()))
+    return out
+
+
 def match(truth: np.ndarray, tracks, max_d: float = 0.5) -> dict[int, int]:
     """Confirmed or coasting track id -> index of the nearest true head within max_d (greedy)."""
     pairs = []
@@ -155,12 +168,8 @@ def run(how: str, seconds: float, at: float, down: float, mode: str, out: Path, 
                 d2, t_exec, t_ready, err2 = start_daemon(rig_path, url, state, mode)
             u = u0 + int(round(f * period * 1e6))
             frame_of_utime[u] = f
-            for k in rng.permutation(len(rig.cameras)):
-                cam = rig.cameras[k]
-                uv = cam.project(people[f])
-                dets = [(x + rng.normal(0, 2.0), y + rng.normal(0, 2.0)) for x, y in uv
-                        if 0 <= x < cam.width and 0 <= y < cam.height and rng.random() > 0.05]
-                pub.publish(f"DETECTIONS_{cam.name}", camera_frame(u, f, cam, dets, 2.0).encode())
+            for channel, data in frame_messages(rig, people[f], f, u, rng):
+                pub.publish(channel, data)
             delay = t0 + (f + 1) * period - time.monotonic()
             if delay > 0:
                 time.sleep(delay)
@@ -224,12 +233,8 @@ def offline(seed: int, gap_s: float, at: float, seconds: float, out: Path, mode:
     for f in range(frames):
         u = u0 + int(round(f * period * 1e6))
         frame_of_utime[u] = f
-        for k in rng.permutation(len(rig.cameras)):
-            cam = rig.cameras[k]
-            uv = cam.project(people[f])
-            dets = [(x + rng.normal(0, 2.0), y + rng.normal(0, 2.0)) for x, y in uv
-                    if 0 <= x < cam.width and 0 <= y < cam.height and rng.random() > 0.05]
-            w.write_event(u, f"DETECTIONS_{cam.name}", camera_frame(u, f, cam, dets, 2.0).encode())
+        for channel, data in frame_messages(rig, people[f], f, u, rng):
+            w.write_event(u, channel, data)
     w.close()
     f_stop = int(at / period)
     f_restart = f_stop + int(round(gap_s / period))
