@@ -91,37 +91,32 @@ def match(truth: np.ndarray, tracks, max_d: float = 0.5) -> dict[int, int]:
 def score(before: list, after: list, people: np.ndarray, frame_of_utime: dict, f_restart: int):
     """Identities across the stop: (kept, last_before, first_after, reused_by_other, ids_before,
     ids_after) from the TRACKS messages before the stop and after the restart."""
+    def matched(msgs, ids: set):
+        """(frame, track id, person index) of every confirmed match; every published id into ids."""
+        for m in msgs:
+            f = frame_of_utime.get(m.utime)
+            ids.update(t.id for t in m.tracks)
+            if f is not None:
+                yield from ((f, tid, i) for tid, i in match(people[f], m.tracks).items())
+
     # identities before the stop: id -> the person it was matched to most often
     votes: dict[int, dict[int, int]] = {}
     ids_before: set[int] = set()
-    for m in before:
-        f = frame_of_utime.get(m.utime)
-        ids_before.update(t.id for t in m.tracks)
-        if f is None:
-            continue
-        for tid, i in match(people[f], m.tracks).items():
-            votes.setdefault(tid, {}).setdefault(i, 0)
-            votes[tid][i] += 1
+    for _, tid, i in matched(before, ids_before):
+        votes.setdefault(tid, {}).setdefault(i, 0)
+        votes[tid][i] += 1
     owner = {tid: max(v, key=v.get) for tid, v in votes.items()}
-    last_before = {}
-    for m in before[-5:]:
-        f = frame_of_utime.get(m.utime)
-        if f is not None:
-            last_before = {i: tid for tid, i in match(people[f], m.tracks).items()}
+    last_f = max((frame_of_utime.get(m.utime, -1) for m in before[-5:]), default=-1)
+    last_before = {i: tid for f, tid, i in matched(before[-5:], set()) if f == last_f}
     # after the restart: the identity each person carries in the first second
     first_after: dict[int, int] = {}
     reused_by_other = set()
     ids_after: set[int] = set()
-    for m in after:
-        f = frame_of_utime.get(m.utime)
-        ids_after.update(tr.id for tr in m.tracks)
-        if f is None:
-            continue
-        for tid, i in match(people[f], m.tracks).items():
-            if f <= f_restart + 25:
-                first_after.setdefault(i, tid)
-            if tid in owner and owner[tid] != i:
-                reused_by_other.add(tid)
+    for f, tid, i in matched(after, ids_after):
+        if f <= f_restart + 25:
+            first_after.setdefault(i, tid)
+        if tid in owner and owner[tid] != i:
+            reused_by_other.add(tid)
     kept = sum(1 for i, tid in last_before.items() if first_after.get(i) == tid)
     return kept, last_before, first_after, reused_by_other, ids_before, ids_after
 
