@@ -144,6 +144,20 @@ def test_state_unusable_checkpoint_refused_once_clean_start_ids_fresh(scene, dae
     assert len(second) >= 140  # tracked on from a clean start
 
 
+def test_state_checkpoint_newer_than_input_refused(scene, daemon_path):
+    """The same log run again on its own checkpoint: the first message is older than the saved
+    state (a replay, or the cameras' clock set back), so it is refused, once, and identities are new."""
+    d, rp, log = scene
+    state = d / "st-future"
+    run(daemon_path, rp, log, d / "f1.lcm", "--state", str(state))
+    r = run(daemon_path, rp, log, d / "f2.lcm", "--state", str(state))
+    lines = [ln for ln in r.stderr.splitlines() if str(state) in ln]
+    assert len(lines) == 1 and "refused" in lines[0] and "after the first message" in lines[0], r.stderr
+    before = {t.id for ts in ids_of(d / "f1.lcm").values() for t in ts}
+    after = {t.id for ts in ids_of(d / "f2.lcm").values() for t in ts}
+    assert after and min(after) > max(before)
+
+
 @pytest.mark.parametrize("how", ["kill", "term", "nostate"])
 def test_state_live_restart_keeps_identities_never_reuses(tmp_path, daemon_path, how):
     """Live, 5 cameras, 5 people: the daemon stopped 3.5 s in (SIGKILL, SIGTERM, or SIGKILL with
