@@ -478,14 +478,8 @@ void mvtd_ckpt_first_message(mvtd_t *d, int64_t utime)
         a->last_emitted_utime = h->asm_last_emitted_utime;
         a->last_closed_ref = h->asm_last_emitted_utime;
         int n = 0;
-        mvt_output_t out;
-        if (d->pf) {
-            for (int t = 0; t < MVT_MAX_TARGETS; t++) {
-                n += d->pft->targets[t].id != 0;
-            }
-        } else {
-            mvt_tracker_output(&d->tracker, d->tracker.last_utime_us, &out);
-            n = out.num_tracks;
+        for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+            n += (d->pf ? d->pft->targets[t].id : d->tracker.tracks[t].id) != 0;
         }
         snprintf(d->restore_note, sizeof(d->restore_note),
                  "restored %d tracks saved %.2f s of capture time before the first message", n, (double)age * 1e-6);

@@ -280,7 +280,6 @@ typedef struct mvt_tracker {
     mvt_assoc_ws_t assoc_ws;
     mvt_birth_cand_t cand[MVT_MAX_BIRTH_CANDIDATES];
     int num_cand;
-    int count_candidates;                  /* this collection counts dropped candidates */
     /* re-acquisition (mvt_trk_reacquire): the detection camera k must give track t, or -1 */
     int16_t reacq_det[MVT_MAX_TARGETS][MVT_MAX_CAMERAS];
     uint8_t reacq_any;                     /* some track holds a reservation this frame */
@@ -288,6 +287,8 @@ typedef struct mvt_tracker {
     int16_t rq_cand[MVT_MAX_DETECTIONS];   /* distinct candidates: index into cand */
     mvt_real rq_x[MVT_MAX_DETECTIONS][3];
     mvt_real rq_cov[MVT_MAX_DETECTIONS][9];
+    mvt_real rq_tx[MVT_MAX_TARGETS][3];    /* tracks predicted to the frame time: position */
+    mvt_real rq_tP[MVT_MAX_TARGETS][9];    /* ... and its covariance */
     /* per camera this frame (mvt_trk_evidence_weights): */
     uint8_t ev_boxes[MVT_MAX_CAMERAS];     /* the view sends boxes */
     mvt_real ev_support[MVT_MAX_CAMERAS];  /* log-likelihood ratio of a detection at the place */

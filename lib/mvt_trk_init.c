@@ -36,7 +36,7 @@ static int better(const mvt_birth_cand_t *a, const mvt_birth_cand_t *b)
     return a->n > b->n || (a->n == b->n && a->err_px < b->err_px);
 }
 
-static void add_candidate(mvt_tracker_t *self, const mvt_birth_cand_t *c)
+static void add_candidate(mvt_tracker_t *self, const mvt_birth_cand_t *c, int count)
 {
     if (self->num_cand < MVT_MAX_BIRTH_CANDIDATES) {
         self->cand[self->num_cand++] = *c;
@@ -48,7 +48,7 @@ static void add_candidate(mvt_tracker_t *self, const mvt_birth_cand_t *c)
             worst = i;
         }
     }
-    self->counters.birth_candidates_dropped += (uint64_t)self->count_candidates;
+    self->counters.birth_candidates_dropped += (uint64_t)count;
     if (better(c, &self->cand[worst])) {
         self->cand[worst] = *c;
     }
@@ -200,7 +200,7 @@ static void collect_candidates(mvt_tracker_t *self, const mvt_frame_t *frame, co
                         self->counters.births_refuted += (uint64_t)count;
                         continue;
                     }
-                    add_candidate(self, &cand);
+                    add_candidate(self, &cand, count);
                 }
             }
         }
@@ -269,7 +269,6 @@ static void birth(mvt_tracker_t *self, const mvt_frame_t *frame, const mvt_birth
 
 void mvt_trk_candidates(mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order, int count)
 {
-    self->count_candidates = count;
     collect_candidates(self, frame, order, n_order, count);
     /* best first (insertion sort: stable, bounded by MVT_MAX_BIRTH_CANDIDATES) */
     for (int i = 1; i < self->num_cand; i++) {

@@ -49,16 +49,34 @@ static mvt_real mahalanobis3(const mvt_real a[3], const mvt_real Pa[9], const mv
     return q;
 }
 
-/* The track's position and covariance predicted to utime (the track itself is not changed); the
- * height is the track's own (not extrapolated) with its variance plus the head's spread. */
-static void predicted(const mvt_tracker_t *self, const mvt_track_t *tr, int64_t utime, mvt_real x[3], mvt_real P[9])
+/* Each live track's position and its position covariance predicted to utime, once per frame,
+ * into rq_tx/rq_tP (the tracks themselves are not changed). */
+static void predict_all(mvt_tracker_t *self, int64_t utime)
 {
-    mvt_cv_state_t s = tr->s;
-    (void)mvt_cv_predict_to(&s, utime, self->cfg.q_m2s3);
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        if (self->tracks[t].id == 0) {
+            continue;
+        }
+        mvt_cv_state_t s = self->tracks[t].s;
+        (void)mvt_cv_predict_to(&s, utime, self->cfg.q_m2s3);
+        for (int i = 0; i < 3; i++) {
+            self->rq_tx[t][i] = s.x[i];
+            for (int j = 0; j < 3; j++) {
+                self->rq_tP[t][i * 3 + j] = s.P[i * 6 + j];
+            }
+        }
+    }
+}
+
+/* A lost track's prediction for re-acquisition: horizontally the constant-velocity one; the
+ * height the track's own (not extrapolated), its variance plus the head's spread. */
+static void lost_prediction(const mvt_tracker_t *self, int t, mvt_real x[3], mvt_real P[9])
+{
+    const mvt_track_t *tr = &self->tracks[t];
     for (int i = 0; i < 3; i++) {
-        x[i] = s.x[i];
+        x[i] = self->rq_tx[t][i];
         for (int j = 0; j < 3; j++) {
-            P[i * 3 + j] = i < 2 && j < 2 ? s.P[i * 6 + j] : MVT_R(0.0);
+            P[i * 3 + j] = i < 2 && j < 2 ? self->rq_tP[t][i * 3 + j] : MVT_R(0.0);
         }
     }
     x[2] = tr->s.x[2];
@@ -98,31 +116,25 @@ static int distinct_points(mvt_tracker_t *self)
 void mvt_trk_reacquire(mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order)
 {
     const mvt_tracker_config_t *c = &self->cfg;
-    self->reacq_any = 0;
-    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
-        for (int k = 0; k < MVT_MAX_CAMERAS; k++) {
-            self->reacq_det[t][k] = -1;
-        }
-    }
+    self->reacq_any = 0; /* reacq_det is read only when set */
     /* the lost tracks: confirmed (or coasting), horizontal std above half the closest spacing */
     const mvt_real lost_var = MVT_R(0.25) * c->birth_min_sep_m * c->birth_min_sep_m;
+    if (!(lost_var > MVT_R(0.0))) {
+        return;
+    }
+    predict_all(self, frame->utime_us);
     int rows[MVT_MAX_TARGETS];
     uint8_t lost[MVT_MAX_TARGETS];
     int n_rows = 0;
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         const mvt_track_t *tr = &self->tracks[t];
-        lost[t] = 0;
-        if (tr->id == 0 || tr->status == MVT_TRACK_TENTATIVE) {
-            continue;
-        }
-        mvt_cv_state_t s = tr->s;
-        (void)mvt_cv_predict_to(&s, frame->utime_us, c->q_m2s3);
-        if (s.P[0] > lost_var || s.P[7] > lost_var) {
-            lost[t] = 1;
+        lost[t] = tr->id != 0 && tr->status != MVT_TRACK_TENTATIVE &&
+                  (self->rq_tP[t][0] > lost_var || self->rq_tP[t][4] > lost_var);
+        if (lost[t]) {
             rows[n_rows++] = t;
         }
     }
-    if (n_rows == 0 || !(lost_var > MVT_R(0.0))) {
+    if (n_rows == 0) {
         return;
     }
     mvt_trk_candidates(self, frame, order, n_order, 0);
@@ -137,10 +149,7 @@ void mvt_trk_reacquire(mvt_tracker_t *self, const mvt_frame_t *frame, const int 
             if (tr->id == 0 || lost[t]) {
                 continue;
             }
-            mvt_cv_state_t s = tr->s;
-            (void)mvt_cv_predict_to(&s, frame->utime_us, c->q_m2s3);
-            const mvt_real P[9] = {s.P[0], s.P[1], s.P[2], s.P[6], s.P[7], s.P[8], s.P[12], s.P[13], s.P[14]};
-            const mvt_real d2 = mahalanobis3(s.x, P, self->rq_x[i], self->rq_cov[i]);
+            const mvt_real d2 = mahalanobis3(self->rq_tx[t], self->rq_tP[t], self->rq_x[i], self->rq_cov[i]);
             taken = d2 >= MVT_R(0.0) && d2 <= MVT_REACQ_GATE;
         }
         if (!taken) {
@@ -154,7 +163,7 @@ void mvt_trk_reacquire(mvt_tracker_t *self, const mvt_frame_t *frame, const int 
     /* rows: the lost tracks; columns: the points, then one "not here" per row */
     for (int r = 0; r < n_rows; r++) {
         mvt_real x[3], P[9];
-        predicted(self, &self->tracks[rows[r]], frame->utime_us, x, P);
+        lost_prediction(self, rows[r], x, P);
         mvt_real *row = &self->cl_cost[r * ncol];
         for (int j = 0; j < n_cols; j++) {
             const int i = cols[j];
@@ -163,6 +172,11 @@ void mvt_trk_reacquire(mvt_tracker_t *self, const mvt_frame_t *frame, const int 
         }
         for (int j = 0; j < n_rows; j++) {
             row[n_cols + j] = j == r ? MVT_REACQ_GATE : MVT_R(-1.0);
+        }
+    }
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) { /* only now: the common frame has no lost track */
+        for (int k = 0; k < MVT_MAX_CAMERAS; k++) {
+            self->reacq_det[t][k] = -1;
         }
     }
     int assign[MVT_MAX_TARGETS];
