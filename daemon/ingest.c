@@ -25,9 +25,9 @@ static const mvt_mask_t *decode_mask(mvtd_t *d, int cam, const mvtrack_camera_fr
                            m->saturation, m->num_hs) != MVT_OK) {
         d->masks_rejected++;
         mvtd_log(d, MVTD_LOG_BAD_VALUE,
-                    "camera %s: mask %dx%d with %d runs and %d hue/saturation bytes rejected (runs must sum to the "
-                    "mask, the image must be an integer multiple of it, at most %d pixels)",
-                    d->rig.names[cam], m->mask_width, m->mask_height, m->num_runs, m->num_hs, MVT_MAX_MASK_PIXELS);
+                 "camera %s: mask %dx%d with %d runs and %d hue/saturation bytes rejected (runs must sum to the "
+                 "mask, the image must be an integer multiple of it, at most %d pixels)",
+                 d->rig.names[cam], m->mask_width, m->mask_height, m->num_runs, m->num_hs, MVT_MAX_MASK_PIXELS);
         return NULL;
     }
     d->masks_decoded++;
@@ -145,21 +145,21 @@ void mvtd_handle(mvtd_t *d, const char *channel, const void *data, uint32_t size
         free(m.saturation);
         d->rej_undecodable++;
         mvtd_log(d, MVTD_LOG_UNDECODABLE, "undecodable message on %s (%u bytes) skipped", channel,
-                    (unsigned)size);
+                 (unsigned)size);
         return;
     }
     const int cam = mvtd_rig_find(&d->rig, m.camera != NULL ? m.camera : "");
     if (cam < 0) {
         d->rej_unknown_camera++;
         mvtd_log(d, MVTD_LOG_UNKNOWN_CAMERA, "message on %s names camera '%s', not in the rig: skipped", channel,
-                    m.camera != NULL ? m.camera : "");
+                 m.camera != NULL ? m.camera : "");
         mvtrack_camera_frame_t_decode_cleanup(&m);
         return;
     }
     if (m.utime < 0 || m.utime > MVTD_MAX_UTIME) {
         d->rej_bad_value++; /* time arithmetic (offsets, frame periods) stays far from overflow */
         mvtd_log(d, MVTD_LOG_BAD_VALUE, "camera %s: utime %lld outside 0..2^60 us: skipped", d->rig.names[cam],
-                    (long long)m.utime);
+                 (long long)m.utime);
         mvtrack_camera_frame_t_decode_cleanup(&m);
         return;
     }
@@ -167,7 +167,7 @@ void mvtd_handle(mvtd_t *d, const char *channel, const void *data, uint32_t size
     if (m.width != p->width || m.height != p->height) {
         d->rej_bad_value++;
         mvtd_log(d, MVTD_LOG_BAD_VALUE, "camera %s sends %dx%d images, the rig says %dx%d: skipped", d->rig.names[cam],
-                    m.width, m.height, p->width, p->height);
+                 m.width, m.height, p->width, p->height);
         mvtrack_camera_frame_t_decode_cleanup(&m);
         return;
     }
@@ -175,7 +175,7 @@ void mvtd_handle(mvtd_t *d, const char *channel, const void *data, uint32_t size
     if (d->cam_messages[cam] > 0 && m.frame < d->cam_last_frame[cam]) {
         d->cam_counter_restarts[cam]++; /* harmless: frame sets are built from utime alone */
         mvtd_log(d, MVTD_LOG_CAMERA, "camera %s: frame counter went from %lld to %lld (restarted)",
-                    d->rig.names[cam], (long long)d->cam_last_frame[cam], (long long)m.frame);
+                 d->rig.names[cam], (long long)d->cam_last_frame[cam], (long long)m.frame);
     }
     d->cam_last_frame[cam] = m.frame;
     mvt_view_t *v = &d->scratch_view;
@@ -191,7 +191,7 @@ void mvtd_handle(mvtd_t *d, const char *channel, const void *data, uint32_t size
             fabsf(s->v) > 1e6f) {
             d->rej_bad_value++;
             mvtd_log(d, MVTD_LOG_BAD_VALUE, "camera %s: detection with non-finite or absurd coordinates dropped",
-                        d->rig.names[cam]);
+                     d->rig.names[cam]);
             continue;
         }
         if (n_in == MVTD_MAX_INPUT_DETECTIONS) {
@@ -218,9 +218,9 @@ void mvtd_handle(mvtd_t *d, const char *channel, const void *data, uint32_t size
     if (n_in > kept) {
         d->rej_over_capacity += n_in - kept;
         mvtd_log(d, MVTD_LOG_CAPACITY,
-                    "camera %s: %d detections, capacity MVT_MAX_DETECTIONS=%d: kept each track's nearest, then the "
-                    "highest scores",
-                    d->rig.names[cam], m.num_detections, MVT_MAX_DETECTIONS);
+                 "camera %s: %d detections, capacity MVT_MAX_DETECTIONS=%d: kept each track's nearest, then the "
+                 "highest scores",
+                 d->rig.names[cam], m.num_detections, MVT_MAX_DETECTIONS);
     }
     for (int i = 0; i < kept; i++) {
         v->det[i] = in[idx[i]];
@@ -243,24 +243,24 @@ void mvtd_handle(mvtd_t *d, const char *channel, const void *data, uint32_t size
     case MVTD_ASM_LATE:
         d->rej_late++;
         mvtd_log(d, MVTD_LOG_TIME, "camera %s: message at utime %lld arrived after its frame set: skipped",
-                    d->rig.names[cam], (long long)v->utime_us);
+                 d->rig.names[cam], (long long)v->utime_us);
         break;
     case MVTD_ASM_DUPLICATE:
         d->rej_duplicate++;
         mvtd_log(d, MVTD_LOG_TIME, "camera %s: duplicate message at utime %lld skipped", d->rig.names[cam],
-                    (long long)v->utime_us);
+                 (long long)v->utime_us);
         break;
     case MVTD_ASM_BACKWARDS:
         d->rej_time_backwards++;
         mvtd_log(d, MVTD_LOG_TIME, "camera %s: utime %lld earlier than its previous message: skipped",
-                    d->rig.names[cam], (long long)v->utime_us);
+                 d->rig.names[cam], (long long)v->utime_us);
         break;
     case MVTD_ASM_AHEAD:
         d->rej_time_ahead++;
         mvtd_log(d, MVTD_LOG_TIME,
-                    "camera %s: utime %lld far ahead of the other cameras: skipped (accepted once every camera "
-                    "agrees)",
-                    d->rig.names[cam], (long long)v->utime_us);
+                 "camera %s: utime %lld far ahead of the other cameras: skipped (accepted once every camera "
+                 "agrees)",
+                 d->rig.names[cam], (long long)v->utime_us);
         break;
     }
 }

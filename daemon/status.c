@@ -151,7 +151,7 @@ void mvtd_log_camera_events(mvtd_t *d)
         if (c->went_down[k] != d->went_down_seen[k]) {
             d->went_down_seen[k] = c->went_down[k];
             mvtd_log(d, MVTD_LOG_CAMERA, "camera %s absent from %d frame sets: no longer waited for",
-                        d->rig.names[k], MVTD_ASM_DOWN_SETS);
+                     d->rig.names[k], MVTD_ASM_DOWN_SETS);
         }
         if (c->came_back[k] != d->came_back_seen[k]) {
             d->came_back_seen[k] = c->came_back[k];
@@ -161,6 +161,6 @@ void mvtd_log_camera_events(mvtd_t *d)
     if (c->clock_jumps != d->clock_jumps_seen) {
         d->clock_jumps_seen = c->clock_jumps;
         mvtd_log(d, MVTD_LOG_TIME, "capture clock went back on every camera: time re-based (offset %lld us)",
-                    (long long)d->assembler.offset_us);
+                 (long long)d->assembler.offset_us);
     }
 }

@@ -108,6 +108,6 @@ void mvtd_on_frame(void *ctx, mvt_frame_t *frame, int complete)
     if (d->trk->counters.births_refused_full > d->tracker_births_full_seen) {
         d->tracker_births_full_seen = d->trk->counters.births_refused_full;
         mvtd_log(d, MVTD_LOG_CAPACITY, "track capacity MVT_MAX_TARGETS=%d full: %llu births refused so far",
-                    MVT_MAX_TARGETS, (unsigned long long)d->trk->counters.births_refused_full);
+                 MVT_MAX_TARGETS, (unsigned long long)d->trk->counters.births_refused_full);
     }
 }
