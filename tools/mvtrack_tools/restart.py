@@ -179,7 +179,7 @@ def run(how: str, seconds: float, at: float, down: float, mode: str, out: Path, 
 
     before = [(t, m) for t, m in got if t < t0 + f_stop * period]
     after = [(t, m) for t, m in got if d2 is not None and t >= t_exec]
-    kept, last_before, first_after, reused_by_other, ids_before, ids_after = score(
+    kept, last_before, _, reused_by_other, ids_before, ids_after = score(
         [m for _, m in before], [m for _, m in after], people, frame_of_utime, f_restart)
     res = {
         "how": how, "mode": mode, "down_s": down,
@@ -195,12 +195,6 @@ def run(how: str, seconds: float, at: float, down: float, mode: str, out: Path, 
                                                                         or "no checkpoint" in ln)), None),
         "first_id_after": min(ids_after) if ids_after else None,
     }
-    if os.environ.get("MVTRACK_RESTART_DEBUG"):
-        res["debug_last_before"] = {int(i): int(t) for i, t in last_before.items()}
-        res["debug_first_after"] = {int(i): int(t) for i, t in first_after.items()}
-        res["debug_after"] = [(frame_of_utime.get(m.utime), [(t.id, t.status, [round(x, 2) for x in t.position])
-                                                            for t in m.tracks]) for _, m in after[:12:3]]
-        res["debug_people"] = [[round(x, 2) for x in p] for p in people[f_restart + 1]]
     if how in ("nostate", "nofiles"):
         # nothing restored: every identity after the restart must be new
         res["new_ids_that_existed_before"] = sorted(ids_after & ids_before)
@@ -211,7 +205,6 @@ def run(how: str, seconds: float, at: float, down: float, mode: str, out: Path, 
 def offline(seed: int, gap_s: float, at: float, seconds: float, out: Path, mode: str = "pkf") -> dict:
     """The same scene as a log, cut at `at` with gap_s of it removed, the daemon run on each half
     with --state: deterministic, for comparing versions over many seeds and gaps."""
-    import lcm as _lcm
     from .lcmio import read_log, split_log
     out.mkdir(parents=True, exist_ok=True)
     rig = smartroom()
@@ -223,7 +216,7 @@ def offline(seed: int, gap_s: float, at: float, seconds: float, out: Path, mode:
     people = walkers(rng, 5, frames, period, rig.volume_min, rig.volume_max)
     u0 = 1_700_000_000_000_000
     log = out / f"scene-{seed}.lcm"
-    w = _lcm.EventLog(str(log), "w", overwrite=True)
+    w = lcm.EventLog(str(log), "w", overwrite=True)
     frame_of_utime = {}
     for f in range(frames):
         u = u0 + int(round(f * period * 1e6))
