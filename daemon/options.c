@@ -59,8 +59,15 @@ static void usage(FILE *f)
             "  --gate chi2|paper   association gate: innovation chi-square (default) or the paper's\n"
             "                      projected ellipsoid (Eq. 22-26)\n"
             "  --gate-chi2 X       chi-square threshold, 2 dof (default 13.8)\n"
-            "  --q QX,QY,QZ        process noise, white-acceleration density m^2/s^3 per axis\n"
-            "                      (default 0.5,0.5,0.05; tools/mvtrack learn-q estimates it)\n"
+            "  --motion imm|cv     pkf modes' motion model: imm (default), an interacting multiple\n"
+            "                      model of standing, walking and manoeuvring people that needs no\n"
+            "                      tuning; cv: one constant-velocity model with --q\n"
+            "  --motion-models M   imm: the bank, KIND:QXY:QZ:LEAVE;... (KIND still: q is the\n"
+            "                      diffusion m^2/s; cv: q is the white acceleration m^2/s^3;\n"
+            "                      LEAVE: rate 1/s); default\n"
+            "                      still:2.5e-5:2.5e-5:0.2;cv:0.3:0.02:0.3;cv:3:0.1:1.5\n"
+            "  --q QX,QY,QZ        cv: white-acceleration density m^2/s^3 per axis (default\n"
+            "                      0.5,0.5,0.05; tools/mvtrack learn-q estimates it); implies cv\n"
             "  --sigma-px X        pixel noise for cameras without sigma_px in the rig (default 2)\n"
             "  --deadline-ms X     live mode: process an incomplete frame set this long after its\n"
             "                      first message (default 20)\n"
@@ -86,6 +93,47 @@ static void usage(FILE *f)
             "\n"
             "Exit status: 0 after SIGINT/SIGTERM or at the end of a file:// log; 2 on bad arguments\n"
             "or rig; 1 when LCM cannot be opened.\n");
+}
+
+/* "still:1e-4:1e-4:0.2;cv:0.05:0.02:0.2;cv:3:0.1:1.5" -> an IMM bank. */
+static int parse_models(const char *s, mvt_imm_config_t *c)
+{
+    mvt_imm_config_t out;
+    memset(&out, 0, sizeof(out));
+    const char *p = s;
+    while (*p != '\0') {
+        if (out.n == MVT_IMM_MODELS) {
+            return -1;
+        }
+        mvt_imm_model_t *m = &out.model[out.n];
+        if (strncmp(p, "still:", 6) == 0) {
+            m->kind = MVT_MOTION_STILL;
+            p += 6;
+        } else if (strncmp(p, "cv:", 3) == 0) {
+            m->kind = MVT_MOTION_CV;
+            p += 3;
+        } else {
+            return -1;
+        }
+        double v[3];
+        for (int i = 0; i < 3; i++) {
+            char *end = NULL;
+            v[i] = strtod(p, &end);
+            if (end == p || (i < 2 && *end != ':') || (i == 2 && *end != ';' && *end != '\0')) {
+                return -1;
+            }
+            p = *end == '\0' ? end : end + 1;
+        }
+        m->q[0] = m->q[1] = (mvt_real)v[0];
+        m->q[2] = (mvt_real)v[1];
+        m->leave_hz = (mvt_real)v[2];
+        out.n++;
+    }
+    if (mvt_imm_config_check(&out) != MVT_OK) {
+        return -1;
+    }
+    *c = out;
+    return 0;
 }
 
 static int parse_q(const char *s, mvt_real q[3])
@@ -158,7 +206,8 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
 {
     const char *rig_path = NULL, *in_url = MVTD_DEFAULT_URL, *out_url = NULL, *mode = "pkf", *gate = "chi2",
                *merge = "neither", *occlusion = "box", *particle_model = "column",
-               *state_path = NULL;
+               *state_path = NULL, *motion = NULL, *models = NULL;
+    int q_given = 0;
     double sigma_px = 2.0, deadline_ms = 20.0, gate_chi2 = 13.8;
     mvt_real q[3] = {MVT_R(0.5), MVT_R(0.5), MVT_R(0.05)};
     static const struct option opts[] = {
@@ -171,12 +220,14 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
         {"occlusion", required_argument, 0, 'O'},
         {"particles", required_argument, 0, 'P'}, {"exclusion", required_argument, 0, 'X'},
         {"seed", required_argument, 0, 'S'},     {"publish-particles", required_argument, 0, 'Q'},
-        {"particle-model", required_argument, 0, 'B'}, {"state", required_argument, 0, 'T'}, {0, 0, 0, 0}};
+        {"particle-model", required_argument, 0, 'B'}, {"state", required_argument, 0, 'T'},
+        {"motion", required_argument, 0, 'N'},   {"motion-models", required_argument, 0, 'W'},
+        {0, 0, 0, 0}};
     int opt;
     optind = 1; /* callable more than once (tests, fuzzer) */
     long particles = MVT_MAX_PARTICLES, seed = 1, publish_particles = 0;
     double exclusion_m = -1.0; /* mode-dependent default */
-    while ((opt = getopt_long(argc, argv, "r:i:o:m:g:c:q:s:d:M:O:vhP:X:S:Q:B:T:", opts, NULL)) != -1) {
+    while ((opt = getopt_long(argc, argv, "r:i:o:m:g:c:q:s:d:M:O:vhP:X:S:Q:B:T:N:W:", opts, NULL)) != -1) {
         switch (opt) {
         case 'r': rig_path = optarg; break;
         case 'i': in_url = optarg; break;
@@ -187,6 +238,8 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
         case 'O': occlusion = optarg; break;
         case 'B': particle_model = optarg; break;
         case 'T': state_path = optarg; break;
+        case 'N': motion = optarg; break;
+        case 'W': models = optarg; break;
         case 'c':
             if (option_pos("--gate-chi2", optarg, &gate_chi2) != 0) {
                 return 2;
@@ -197,6 +250,7 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
                 fprintf(stderr, "mvtrackd: --q needs three positive numbers QX,QY,QZ, got '%s'\n", optarg);
                 return 2;
             }
+            q_given = 1;
             break;
         case 's':
             if (option_pos("--sigma-px", optarg, &sigma_px) != 0) {
@@ -259,7 +313,13 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
     const int bi = option_choice("--particle-model", particle_model, particle_models, 2);
     static const char *const occlusions[] = {"box", "off"};
     const int oi = option_choice("--occlusion", occlusion, occlusions, 2);
-    if (mi < 0 || gi < 0 || ri < 0 || bi < 0 || oi < 0) {
+    static const char *const motions[] = {"imm", "cv"};
+    const int vi = motion == NULL ? (q_given ? 1 : 0) : option_choice("--motion", motion, motions, 2);
+    if (mi < 0 || gi < 0 || ri < 0 || bi < 0 || oi < 0 || vi < 0) {
+        return 2;
+    }
+    if (vi == 0 && q_given) {
+        fprintf(stderr, "mvtrackd: --q sets the single model's noise; it does not go with --motion imm\n");
         return 2;
     }
     static const mvt_pkf_lin_t mode_lin[] = {MVT_PKF_JACOBIAN, MVT_PKF_JACOBIAN, MVT_PKF_PAPER,
@@ -276,7 +336,13 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
         exclusion_m = mi >= 5 ? 0.5 : 0.4;
     }
     cfg.exclusion_m = (mvt_real)exclusion_m;
-    memcpy(cfg.q_m2s3, q, sizeof(q));
+    if (vi == 1) {
+        mvt_imm_config_single(&cfg.motion, q);
+    } else if (models != NULL && parse_models(models, &cfg.motion) != 0) {
+        fprintf(stderr, "mvtrackd: --motion-models needs up to %d models KIND:QXY:QZ:LEAVE separated by ';' "
+                        "(KIND still or cv, q > 0, leave rate >= 0 per second), got '%s'\n", MVT_IMM_MODELS, models);
+        return 2;
+    }
     d->mode_name = mode;
 
     char err[512];

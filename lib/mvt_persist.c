@@ -68,6 +68,30 @@ static int place_ok(const mvt_tracker_config_t *c, const mvt_real pos[3], const 
     return 1;
 }
 
+static int estimate_ok(const mvt_tracker_config_t *c, const mvt_cv_state_t *s, int64_t now)
+{
+    return mvt_la_all_finite(s->x, 6) && covariance_ok(s->P) && place_ok(c, s->x, s->x + 3) && time_ok(s->utime_us, now);
+}
+
+/* An IMM bank (mvt_trk_motion.c: used unless the motion is one constant-velocity model): every
+ * model's estimate as good as the combined one and at its time, probabilities that sum to 1. */
+static int bank_ok(const mvt_tracker_config_t *c, const mvt_track_t *tr)
+{
+    if (c->motion.n == 1 && c->motion.model[0].kind == MVT_MOTION_CV) {
+        return 1;
+    }
+    mvt_real sum = MVT_R(0.0);
+    for (int j = 0; j < c->motion.n; j++) {
+        const mvt_real mu = tr->imm.mu[j];
+        if (!(mu >= MVT_R(0.0) && mu <= MVT_R(1.0)) || tr->imm.m[j].utime_us != tr->s.utime_us ||
+            !estimate_ok(c, &tr->imm.m[j], tr->s.utime_us)) {
+            return 0;
+        }
+        sum += mu;
+    }
+    return MVT_FABS(sum - MVT_R(1.0)) <= MVT_R(1e-3);
+}
+
 static int ids_unique(const int32_t *ids, int n)
 {
     for (int i = 0; i < n; i++) {
@@ -105,9 +129,9 @@ static int tracker_state_ok(const mvt_tracker_config_t *c, const mvt_tracker_per
             continue;
         }
         const int64_t now = p->last_utime_us;
-        if (tr->id < 0 || !p->have_time || !status_ok(tr->status) || !mvt_la_all_finite(tr->s.x, 6) ||
-            !covariance_ok(tr->s.P) || !place_ok(c, tr->s.x, tr->s.x + 3) || !time_ok(tr->s.utime_us, now) || !time_ok(tr->last_update_us, now) ||
-            !time_ok(tr->last_explained_us, now) || !time_ok(tr->last_consistent_us, now) || tr->misses < 0) {
+        if (tr->id < 0 || !p->have_time || !status_ok(tr->status) || !estimate_ok(c, &tr->s, now) ||
+            !time_ok(tr->last_update_us, now) || !time_ok(tr->last_explained_us, now) ||
+            !time_ok(tr->last_consistent_us, now) || tr->misses < 0 || !bank_ok(c, tr)) {
             return 0;
         }
     }

@@ -16,9 +16,7 @@ void mvt_tracker_config_default(mvt_tracker_config_t *c)
     c->filter = MVT_FILTER_PROJECTIVE;
     c->lin = MVT_PKF_JACOBIAN;
     c->gate = MVT_GATE_CHI2;
-    c->q_m2s3[0] = MVT_R(0.5);
-    c->q_m2s3[1] = MVT_R(0.5);
-    c->q_m2s3[2] = MVT_R(0.05);
+    mvt_imm_config_default(&c->motion);
     c->gate_chi2 = MVT_R(13.8);
     c->paper_gamma = MVT_R(6.0);
     for (int i = 0; i < 3; i++) {
@@ -61,12 +59,12 @@ void mvt_tracker_config_default(mvt_tracker_config_t *c)
 static int config_ok(const mvt_tracker_config_t *c)
 {
     for (int i = 0; i < 3; i++) {
-        if (!(c->q_m2s3[i] > MVT_R(0.0)) || !isfinite(c->q_m2s3[i]) || !(c->paper_var_m2[i] > MVT_R(0.0)) ||
+        if (!(c->paper_var_m2[i] > MVT_R(0.0)) ||
             !isfinite(c->volume_min[i]) || !isfinite(c->volume_max[i]) || !(c->volume_max[i] > c->volume_min[i])) {
             return 0;
         }
     }
-    return c->gate_chi2 > MVT_R(0.0) && c->paper_gamma > MVT_R(0.0) && c->paper_delta > MVT_R(0.0) &&
+    return mvt_imm_config_check(&c->motion) == MVT_OK && c->gate_chi2 > MVT_R(0.0) && c->paper_gamma > MVT_R(0.0) && c->paper_delta > MVT_R(0.0) &&
            c->birth_reproj_sigma > MVT_R(0.0) && c->birth_min_reproj_px >= MVT_R(0.0) && c->birth_min_views >= 2 &&
            c->birth_min_sep_m >= MVT_R(0.0) && c->init_vel_std_ms > MVT_R(0.0) && c->confirm_window >= 1 &&
            c->seen_min_views >= 1 && c->seen_max_std_m >= MVT_R(0.0) && isfinite(c->seen_max_std_m) &&
@@ -149,7 +147,7 @@ static void step_projective(mvt_tracker_t *self, const mvt_frame_t *frame, const
         const int64_t tk = frame->views[k].utime_us;
         for (int t = 0; t < MVT_MAX_TARGETS; t++) {
             if (self->tracks[t].id != 0) {
-                (void)mvt_cv_predict_to(&self->tracks[t].s, tk, c->q_m2s3);
+                mvt_trk_predict(self, &self->tracks[t], tk);
             }
         }
         int assign[MVT_MAX_TARGETS];
@@ -168,7 +166,7 @@ static void step_projective(mvt_tracker_t *self, const mvt_frame_t *frame, const
                 c->merge == MVT_MERGE_SHARE && self->merge_nb[t] >= 0 ? self->merge_cov[t] : NULL;
             mvt_err_t err = mvt_pkf_innovation_from(&self->pred[t], &self->meas[k][assign[t]], extra, &in);
             if (err == MVT_OK) {
-                err = mvt_pkf_update(&tr->s, &in);
+                err = mvt_trk_update_pkf(self, tr, &in, extra);
             }
             if (err == MVT_OK) {
                 tr->cameras_used |= 1u << k;
@@ -186,7 +184,7 @@ static void step_triangulate(mvt_tracker_t *self, const mvt_frame_t *frame, cons
     const mvt_tracker_config_t *c = &self->cfg;
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         if (self->tracks[t].id != 0) {
-            (void)mvt_cv_predict_to(&self->tracks[t].s, frame->utime_us, c->q_m2s3);
+            mvt_trk_predict(self, &self->tracks[t], frame->utime_us);
         }
     }
     /* association of each camera's detections to the predicted tracks (the same gate as the
@@ -237,7 +235,7 @@ static void step_triangulate(mvt_tracker_t *self, const mvt_frame_t *frame, cons
         if (mvt_tri_linear(self->cams, in, m, x) != MVT_OK || mvt_tri_covariance(self->cams, in, m, x, cov) != MVT_OK) {
             continue;
         }
-        if (mvt_cv_update_point(&tr->s, x, cov, MVT_R(0.0), NULL) == MVT_OK) {
+        if (mvt_trk_update_point(self, tr, x, cov) == MVT_OK) {
             tr->cameras_used |= used_bits;
             self->counters.updates++;
         } else {
@@ -328,7 +326,7 @@ mvt_err_t mvt_tracker_step(mvt_tracker_t *self, const mvt_frame_t *frame, mvt_ou
     }
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         if (self->tracks[t].id != 0) {
-            (void)mvt_cv_predict_to(&self->tracks[t].s, frame->utime_us, self->cfg.q_m2s3);
+            mvt_trk_predict(self, &self->tracks[t], frame->utime_us);
         }
     }
     mvt_trk_delete(self, frame->utime_us);

@@ -28,6 +28,7 @@
 #include "mvt_assoc.h"
 #include "mvt_camera.h"
 #include "mvt_cv.h"
+#include "mvt_imm.h"
 #include "mvt_pkf.h"
 #include "mvt_tri.h"
 
@@ -64,8 +65,10 @@ typedef struct mvt_tracker_config {
     mvt_filter_t filter;        /* default MVT_FILTER_PROJECTIVE */
     mvt_pkf_lin_t lin;          /* default MVT_PKF_JACOBIAN */
     mvt_gate_t gate;            /* default MVT_GATE_CHI2 */
-    mvt_real q_m2s3[3];         /* white-noise acceleration spectral density per axis, m^2/s^3,
-                                   > 0; default 0.5, 0.5, 0.05 (learn it: tools/mvtrack learn-q) */
+    mvt_imm_config_t motion;    /* the motion models (mvt_imm.h): default mvt_imm_config_default,
+                                   an IMM of standing, walking and manoeuvring people that needs no
+                                   tuning; mvt_imm_config_single(q) is the single constant-velocity
+                                   filter with white-acceleration density q (m^2/s^3 per axis) */
     mvt_real gate_chi2;         /* chi-square gate, 2 dof; default 13.8 (0.1 % false rejection) */
     mvt_real paper_gamma;       /* Eq. 23 gamma; default 6 */
     mvt_real paper_var_m2[3];   /* Eq. 23 per-axis variance of the frame-to-frame position change
@@ -223,7 +226,8 @@ typedef struct mvt_counters {
 typedef struct mvt_track {
     int32_t id;                 /* 0: free slot */
     int32_t status;
-    mvt_cv_state_t s;
+    mvt_cv_state_t s;           /* the estimate: the motion models' combination */
+    mvt_imm_t imm;              /* each motion model's estimate and probability */
     uint32_t cameras_used;      /* this frame */
     uint32_t cameras_occluded;  /* this frame: cameras that explained the track as hidden */
     uint32_t cameras_uncovered; /* this frame: cameras in whose picture the track's place is in no

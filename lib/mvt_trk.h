@@ -81,6 +81,19 @@ int mvt_trk_cand_point(mvt_tracker_t *self, const mvt_birth_cand_t *cand, mvt_re
 /* Re-acquisition before the per-camera association (mvt_trk_reacq.c). O(C^2 D^2 + T^2 (T + D)). */
 void mvt_trk_reacquire(mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order);
 
+/* The motion model's operations on a track (mvt_trk_motion.c): the single constant-velocity
+ * filter on tr->s, or the IMM bank tr->imm with tr->s its combination. */
+void mvt_trk_start(mvt_tracker_t *self, mvt_track_t *tr, const mvt_real x[3], const mvt_real cov[9], int64_t utime_us);
+void mvt_trk_predict(mvt_tracker_t *self, mvt_track_t *tr, int64_t utime_us);
+/* in: the innovation against tr->s (mvt_pkf_innovation_from); extra_px2 as given to it (or NULL) */
+mvt_err_t mvt_trk_update_pkf(mvt_tracker_t *self, mvt_track_t *tr, const mvt_pkf_innov_t *in, const mvt_real *extra_px2);
+mvt_err_t mvt_trk_update_point(mvt_tracker_t *self, mvt_track_t *tr, const mvt_real z[3], const mvt_real R[9]);
+mvt_err_t mvt_trk_truncate_ground(mvt_tracker_t *self, mvt_track_t *tr, const mvt_real H[3], mvt_real value,
+                                  mvt_real extra_var, mvt_real lo, mvt_real hi);
+mvt_err_t mvt_trk_repair(mvt_tracker_t *self, mvt_track_t *tr);
+/* The estimate tr->s predicted to utime_us into out, the track unchanged. */
+void mvt_trk_predicted(const mvt_tracker_t *self, const mvt_track_t *tr, int64_t utime_us, mvt_cv_state_t *out);
+
 /* The track's position is within the volume extended by volume_margin_m. */
 int mvt_trk_inside_volume(const mvt_tracker_config_t *c, const mvt_real x[3]);
 

@@ -90,7 +90,7 @@ void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us)
             }
         }
         uint64_t *reason = NULL; /* the counter of the deletion's reason */
-        if (mvt_cv_repair(&tr->s, c->var_floor_m2) != MVT_OK) {
+        if (mvt_trk_repair(self, tr) != MVT_OK) {
             self->counters.numeric_faults++;
             reason = &self->counters.numeric_faults;
         }

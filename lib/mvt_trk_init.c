@@ -258,7 +258,7 @@ static void birth(mvt_tracker_t *self, const mvt_frame_t *frame, const mvt_birth
         self->next_id = 1;
     }
     tr->status = c->confirm_hits <= 1 ? MVT_TRACK_CONFIRMED : MVT_TRACK_TENTATIVE;
-    mvt_cv_init(&tr->s, x, cov, c->init_vel_std_ms * c->init_vel_std_ms, frame->utime_us);
+    mvt_trk_start(self, tr, x, cov, frame->utime_us);
     tr->cameras_used = bits;
     tr->hit_history = 1u;
     tr->last_update_us = frame->utime_us;

@@ -213,7 +213,7 @@ void mvt_trk_occlusion(mvt_tracker_t *self, const mvt_view_t *view, int k, const
          * position (the column's dependence on the unseen head height is dropped), so a hidden
          * track's height stays what the views last measured */
         const mvt_real Hg[3] = {p->H[0], p->H[1], MVT_R(0.0)};
-        const mvt_err_t err = mvt_cv_truncate_ground(&tr->s, Hg, p->h[0], MVT_R(0.0), best_lo, best_hi, NULL);
+        const mvt_err_t err = mvt_trk_truncate_ground(self, tr, Hg, p->h[0], MVT_R(0.0), best_lo, best_hi);
         if (err == MVT_OK) {
             tr->cameras_occluded |= 1u << k;
             self->counters.occluded_updates++;
@@ -263,12 +263,11 @@ void mvt_trk_exclusion(mvt_tracker_t *self)
             const mvt_real va = horiz_var(&ta->s, n), vb = horiz_var(&tb->s, n);
             mvt_err_t err = MVT_OK;
             if (poor_a) {
-                err = mvt_cv_truncate_ground(&ta->s, n, na, vb, nb + c->exclusion_m, nb + c->exclusion_m + MVT_R(1e3), NULL);
+                err = mvt_trk_truncate_ground(self, ta, n, na, vb, nb + c->exclusion_m, nb + c->exclusion_m + MVT_R(1e3));
                 self->counters.exclusion_updates += err == MVT_OK;
             }
             if (poor_b && err != MVT_ERR_INVALID) {
-                err = mvt_cv_truncate_ground(&tb->s, m, -nb, va, -na + c->exclusion_m, -na + c->exclusion_m + MVT_R(1e3),
-                                         NULL);
+                err = mvt_trk_truncate_ground(self, tb, m, -nb, va, -na + c->exclusion_m, -na + c->exclusion_m + MVT_R(1e3));
                 self->counters.exclusion_updates += err == MVT_OK;
             }
             if (err != MVT_OK && err != MVT_ERR_NUMERIC) {

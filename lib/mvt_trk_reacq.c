@@ -57,8 +57,8 @@ static void predict_all(mvt_tracker_t *self, int64_t utime)
         if (self->tracks[t].id == 0) {
             continue;
         }
-        mvt_cv_state_t s = self->tracks[t].s;
-        (void)mvt_cv_predict_to(&s, utime, self->cfg.q_m2s3);
+        mvt_cv_state_t s;
+        mvt_trk_predicted(self, &self->tracks[t], utime, &s);
         for (int i = 0; i < 3; i++) {
             self->rq_tx[t][i] = s.x[i];
             for (int j = 0; j < 3; j++) {

@@ -29,6 +29,8 @@ extern "C" {
 #include "test_support.h"
 
 using Mat8 = Eigen::Matrix<double, 8, 8>;
+using Vec6d = Eigen::Matrix<double, 6, 1>;
+using Mat6d = Eigen::Matrix<double, 6, 6>;
 using Vec8 = Eigen::Matrix<double, 8, 1>;
 
 static const double POS_TOL = MVT_USE_DOUBLE ? 1e-9 : 2e-4;   /* metres */
@@ -308,6 +310,178 @@ static void test_mvt_pkf_update_sequence_matches_eigen_oracle(void **state)
     }
 }
 
+/* The textbook IMM (Blom and Bar-Shalom; Bar-Shalom, Li and Kirubarajan, Sec. 11.6.6) in Eigen
+ * double: full 6x6 transition and noise matrices per model, each model's EKF linearised at its own
+ * estimate, Gaussian likelihoods with their normalisation; with p_outlier > 0 the measurement is
+ * the person's with probability 1 - p_outlier (the PDA filter's one-measurement update,
+ * Bar-Shalom and Li, Sec. 6.4: x += w K y, P = P - w K S K^T + w (1 - w) K y y^T K^T). */
+struct OracleImm {
+    int n;
+    Vec6d x[MVT_IMM_MODELS];
+    Mat6d P[MVT_IMM_MODELS];
+    double mu[MVT_IMM_MODELS];
+    mvt_imm_config_t cfg;
+    void transition(int j, double dt, Mat6d &F, Mat6d &Q) const
+    {
+        F.setIdentity();
+        Q.setZero();
+        for (int i = 0; i < 3; i++) {
+            const double q = cfg.model[j].q[i];
+            if (cfg.model[j].kind == MVT_MOTION_STILL) {
+                F(3 + i, 3 + i) = 0.0;
+                Q(i, i) = q * dt;
+                Q(3 + i, 3 + i) = q;
+            } else {
+                F(i, 3 + i) = dt;
+                Q(i, i) = q * dt * dt * dt / 3;
+                Q(i, 3 + i) = Q(3 + i, i) = q * dt * dt / 2;
+                Q(3 + i, 3 + i) = q * dt;
+            }
+        }
+    }
+    void predict(double dt)
+    {
+        Eigen::MatrixXd p(n, n);
+        for (int i = 0; i < n; i++) {
+            const double stay = std::exp(-(double)cfg.model[i].leave_hz * dt);
+            for (int j = 0; j < n; j++) p(i, j) = i == j ? stay : (1 - stay) / (n - 1);
+        }
+        Vec6d x0[MVT_IMM_MODELS];
+        Mat6d P0[MVT_IMM_MODELS];
+        double c[MVT_IMM_MODELS];
+        for (int j = 0; j < n; j++) {
+            c[j] = 0;
+            for (int i = 0; i < n; i++) c[j] += p(i, j) * mu[i];
+            x0[j].setZero();
+            for (int i = 0; i < n; i++) x0[j] += p(i, j) * mu[i] / c[j] * x[i];
+            P0[j].setZero();
+            for (int i = 0; i < n; i++) {
+                const Vec6d d = x[i] - x0[j];
+                P0[j] += p(i, j) * mu[i] / c[j] * (P[i] + d * d.transpose());
+            }
+        }
+        for (int j = 0; j < n; j++) {
+            Mat6d F, Q;
+            transition(j, dt, F, Q);
+            x[j] = F * x0[j];
+            P[j] = F * P0[j] * F.transpose() + Q;
+            mu[j] = c[j];
+        }
+    }
+    void update(const OracleCam &o, const Eigen::Vector2d &raw, double r)
+    {
+        double like[MVT_IMM_MODELS], sum = 0;
+        for (int j = 0; j < n; j++) {
+            Eigen::Vector2d uv;
+            Eigen::Matrix<double, 2, 3> J;
+            cv_project(o, x[j].head<3>(), uv, &J);
+            Eigen::Matrix<double, 2, 6> H = Eigen::Matrix<double, 2, 6>::Zero();
+            H.leftCols<3>() = J;
+            const Eigen::Vector2d y = raw - uv;
+            const Eigen::Matrix2d S = H * P[j] * H.transpose() + r * Eigen::Matrix2d::Identity();
+            const Eigen::Matrix<double, 6, 2> K = P[j] * H.transpose() * S.inverse();
+            const double gauss = std::exp(-0.5 * y.dot(S.inverse() * y)) / (2 * M_PI * std::sqrt(S.determinant()));
+            const double eps = cfg.p_outlier, rad = cfg.outlier_radius_px;
+            like[j] = (1 - eps) * gauss + eps / (M_PI * rad * rad);
+            const double w = (1 - eps) * gauss / like[j]; /* P(the detection is the person's) */
+            x[j] += w * K * y;
+            P[j] = P[j] - w * K * S * K.transpose() + w * (1 - w) * (K * y) * (K * y).transpose();
+            sum += mu[j] * like[j];
+        }
+        for (int j = 0; j < n; j++) mu[j] = mu[j] * like[j] / sum;
+    }
+    Vec6d combined() const
+    {
+        Vec6d m = Vec6d::Zero();
+        for (int j = 0; j < n; j++) m += mu[j] * x[j];
+        return m;
+    }
+};
+
+static void test_mvt_imm_matches_eigen_textbook_imm(void **state)
+{
+    (void)state;
+    std::mt19937 g(5);
+    std::normal_distribution<double> N(0, 1);
+    const auto ps = random_params(g, 5, false);
+    std::vector<mvt_camera_t> cams(5);
+    std::vector<OracleCam> oc;
+    for (int k = 0; k < 5; k++) {
+        assert_int_equal(mvt_cam_init(&cams[k], &ps[k]), MVT_OK);
+        oc.push_back(oracle_of(ps[k]));
+    }
+  for (int robust = 0; robust < 2; robust++) {
+    mvt_imm_config_t cfg;
+    mvt_imm_config_default(&cfg);
+    if (!robust) cfg.p_outlier = 0; /* Gaussian measurements: the textbook IMM */
+    mvt_cv_state_t s;
+    const mvt_real p0[3] = {2.5f, 2.0f, 1.7f}, cov[9] = {0.01f, 0, 0, 0, 0.01f, 0, 0, 0, 0.01f};
+    mvt_cv_init(&s, p0, cov, 0.25f, 0);
+    mvt_imm_t imm;
+    mvt_imm_init(&imm, &cfg, &s);
+    OracleImm o;
+    o.n = cfg.n;
+    o.cfg = cfg;
+    for (int j = 0; j < cfg.n; j++) {
+        o.mu[j] = imm.mu[j];
+        for (int a = 0; a < 6; a++) {
+            o.x[j](a) = s.x[a];
+            for (int b = 0; b < 6; b++) o.P[j](a, b) = s.P[a * 6 + b];
+        }
+    }
+    /* stands 2 s, walks east at 1 m/s, turns north sharply at 4 s, stops at 6 s */
+    Eigen::Vector3d truth(2.5, 2.0, 1.7);
+    double worst = 0, worst_mu = 0;
+    double mu_at[3][MVT_IMM_MODELS];
+    for (int step = 1; step <= 200; step++) {
+        const double t = step * 0.04;
+        const Eigen::Vector3d v = t < 2 ? Eigen::Vector3d(0, 0, 0) : t < 4 ? Eigen::Vector3d(1, 0, 0)
+                                  : t < 6 ? Eigen::Vector3d(0, 1, 0) : Eigen::Vector3d(0, 0, 0);
+        truth += 0.04 * v;
+        const int64_t us = (int64_t)step * 40000;
+        assert_int_equal(mvt_imm_predict_to(&imm, &cfg, us, &s), MVT_OK);
+        o.predict(0.04);
+        for (int k = 0; k < 5; k++) {
+            Eigen::Vector2d uv;
+            cv_project(oc[k], truth, uv, nullptr);
+            uv += 2.0 * Eigen::Vector2d(N(g), N(g));
+            if (robust && step % 9 == k) uv += Eigen::Vector2d(12.0, -9.0); /* a displaced blob */
+            const mvt_real raw[2] = {(mvt_real)uv(0), (mvt_real)uv(1)};
+            mvt_pkf_meas_t m;
+            mvt_pkf_innov_t in;
+            assert_int_equal(mvt_pkf_meas_make(&cams[k], raw, 2.0f, &m), MVT_OK);
+            assert_int_equal(mvt_pkf_innovation(&s, &cams[k], MVT_PKF_JACOBIAN, &m, &in), MVT_OK);
+            const mvt_real noise[4] = {in.r, 0, 0, in.r};
+            assert_int_equal(mvt_imm_update(&imm, &cfg, 2, in.H, in.y, noise, &s), MVT_OK);
+            o.update(oc[k], Eigen::Vector2d(raw[0], raw[1]), 4.0);
+        }
+        const Vec6d xo = o.combined();
+        for (int i = 0; i < 3; i++) {
+            const double d = std::fabs((double)s.x[i] - xo(i));
+            worst = std::fmax(worst, d);
+            assert_true(d < (robust ? 5e-4 : 2e-4)); /* linearised at the combination, float */
+        }
+        double sum = 0;
+        for (int j = 0; j < cfg.n; j++) {
+            worst_mu = std::fmax(worst_mu, std::fabs((double)imm.mu[j] - o.mu[j]));
+            assert_true(std::fabs((double)imm.mu[j] - o.mu[j]) < (robust ? 0.02 : 5e-3));
+            sum += imm.mu[j];
+        }
+        assert_true(std::fabs(sum - 1.0) < 1e-5);
+        const int mark = step == 45 ? 0 : step == 105 ? 1 : step == 199 ? 2 : -1;
+        if (mark >= 0)
+            for (int j = 0; j < cfg.n; j++) mu_at[mark][j] = imm.mu[j];
+    }
+    /* the bank says what the person does: standing, then walking/manoeuvring, then standing */
+    assert_true(mu_at[0][0] > 0.8);
+    assert_true(mu_at[1][0] < 0.05);
+    assert_true(mu_at[2][0] > 0.8);
+    std::printf("# IMM (p_outlier %.2f) vs the textbook IMM over 200 steps: worst |x| %.3g m, worst |mu| %.3g; "
+                "P(still) %.2f / %.2f / %.2f at 1.8 s / 4.2 s / 8 s\n", (double)cfg.p_outlier,
+                worst, worst_mu, (double)mu_at[0][0], (double)mu_at[1][0], (double)mu_at[2][0]);
+  }
+}
+
 static void test_mvt_cv_update_point_matches_eigen_kalman(void **state)
 {
     (void)state;
@@ -400,6 +574,7 @@ int main(void)
         cmocka_unit_test(test_mvt_cam_project_matches_opencv),
         cmocka_unit_test(test_mvt_pkf_update_sequence_matches_eigen_oracle),
         cmocka_unit_test(test_mvt_cv_update_point_matches_eigen_kalman),
+        cmocka_unit_test(test_mvt_imm_matches_eigen_textbook_imm),
         cmocka_unit_test(test_mvt_pkf_paper_distance_matches_projected_ellipsoid),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

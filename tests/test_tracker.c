@@ -486,7 +486,7 @@ static void test_mvt_tracker_init_bad_config_rejected(void **state)
     mvt_tracker_config_default(&cfg);
     assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 0), MVT_ERR_INVALID);
     assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, MVT_MAX_CAMERAS + 1), MVT_ERR_INVALID);
-    cfg.q_m2s3[1] = -1;
+    cfg.motion.model[0].q[1] = -1;
     assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 5), MVT_ERR_INVALID);
     mvt_tracker_config_default(&cfg);
     cfg.confirm_hits = 9;

@@ -1,0 +1,396 @@
+#include "mvt_imm.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "mvt_linalg.h"
+
+void mvt_imm_config_default(mvt_imm_config_t *c)
+{
+    memset(c, 0, sizeof(*c));
+    const mvt_imm_model_t bank[3] = {
+        {MVT_MOTION_STILL, {MVT_R(2.5e-5), MVT_R(2.5e-5), MVT_R(2.5e-5)}, MVT_R(0.2)},
+        {MVT_MOTION_CV, {MVT_R(0.3), MVT_R(0.3), MVT_R(0.02)}, MVT_R(0.3)},
+        {MVT_MOTION_CV, {MVT_R(3.0), MVT_R(3.0), MVT_R(0.1)}, MVT_R(1.5)},
+    };
+    c->n = MVT_IMM_MODELS < 3 ? MVT_IMM_MODELS : 3;
+    c->p_outlier = MVT_R(0.1);
+    c->outlier_radius_px = MVT_R(150.0);
+    for (int j = 0; j < c->n; j++) {
+        c->model[j] = bank[3 - c->n + j]; /* a smaller capacity keeps the moving models */
+    }
+}
+
+void mvt_imm_config_single(mvt_imm_config_t *c, const mvt_real q[3])
+{
+    memset(c, 0, sizeof(*c));
+    c->n = 1;
+    c->outlier_radius_px = MVT_R(150.0); /* p_outlier 0: the single filter is the plain PKF */
+    c->model[0].kind = MVT_MOTION_CV;
+    for (int i = 0; i < 3; i++) {
+        c->model[0].q[i] = q[i];
+    }
+}
+
+mvt_err_t mvt_imm_config_check(const mvt_imm_config_t *c)
+{
+    if (c->n < 1 || c->n > MVT_IMM_MODELS) {
+        return MVT_ERR_INVALID;
+    }
+    for (int j = 0; j < c->n; j++) {
+        const mvt_imm_model_t *m = &c->model[j];
+        if (m->kind != MVT_MOTION_CV && m->kind != MVT_MOTION_STILL) {
+            return MVT_ERR_INVALID;
+        }
+        for (int i = 0; i < 3; i++) {
+            if (!(m->q[i] > MVT_R(0.0)) || !isfinite(m->q[i])) {
+                return MVT_ERR_INVALID;
+            }
+        }
+        if (!(m->leave_hz >= MVT_R(0.0)) || !isfinite(m->leave_hz)) {
+            return MVT_ERR_INVALID;
+        }
+    }
+    if (!(c->p_outlier >= MVT_R(0.0) && c->p_outlier < MVT_R(1.0)) ||
+        !(c->outlier_radius_px > MVT_R(0.0)) || !isfinite(c->outlier_radius_px)) {
+        return MVT_ERR_INVALID;
+    }
+    return MVT_OK;
+}
+
+void mvt_imm_stationary(const mvt_imm_config_t *c, mvt_real mu[MVT_IMM_MODELS])
+{
+    /* Leaving j at rate r_j for any other model alike: the balance pi_j r_j = sum_{i != j}
+     * pi_i r_i / (n - 1) holds for pi_j r_j constant, so pi_j is proportional to 1 / r_j. */
+    int any_zero = 0;
+    for (int j = 0; j < c->n; j++) {
+        any_zero |= !(c->model[j].leave_hz > MVT_R(0.0));
+    }
+    mvt_real sum = MVT_R(0.0);
+    for (int j = 0; j < c->n; j++) {
+        mu[j] = any_zero ? MVT_R(1.0) : MVT_R(1.0) / c->model[j].leave_hz;
+        sum += mu[j];
+    }
+    for (int j = 0; j < c->n; j++) {
+        mu[j] /= sum;
+    }
+}
+
+void mvt_imm_init(mvt_imm_t *imm, const mvt_imm_config_t *c, const mvt_cv_state_t *s)
+{
+    memset(imm, 0, sizeof(*imm));
+    for (int j = 0; j < c->n; j++) {
+        imm->m[j] = *s;
+    }
+    mvt_imm_stationary(c, imm->mu);
+}
+
+/* A standing head: x_p' = x_p + w_p, x_v' = w_v, w_p ~ N(0, q dt), w_v ~ N(0, q / 1 s). */
+static void predict_still(mvt_cv_state_t *s, mvt_real dt, const mvt_real q[3])
+{
+    mvt_real *P = s->P;
+    for (int i = 0; i < 3; i++) {
+        s->x[i + 3] = MVT_R(0.0);
+        for (int j = 0; j < 6; j++) {
+            P[(i + 3) * 6 + j] = MVT_R(0.0);
+            P[j * 6 + (i + 3)] = MVT_R(0.0);
+        }
+    }
+    for (int i = 0; i < 3; i++) {
+        P[i * 6 + i] += q[i] * dt;
+        P[(i + 3) * 6 + (i + 3)] = q[i];
+    }
+}
+
+void mvt_imm_combine(const mvt_imm_t *imm, const mvt_imm_config_t *c, mvt_cv_state_t *s)
+{
+    const int n = c->n;
+    s->utime_us = imm->m[0].utime_us;
+    if (n == 1) {
+        memcpy(s->x, imm->m[0].x, sizeof(s->x));
+        memcpy(s->P, imm->m[0].P, sizeof(s->P));
+        return;
+    }
+    for (int i = 0; i < 6; i++) {
+        mvt_real acc = MVT_R(0.0);
+        for (int j = 0; j < n; j++) {
+            acc += imm->mu[j] * imm->m[j].x[i];
+        }
+        s->x[i] = acc;
+    }
+    mvt_real d[MVT_IMM_MODELS][6];
+    for (int j = 0; j < n; j++) {
+        for (int i = 0; i < 6; i++) {
+            d[j][i] = imm->m[j].x[i] - s->x[i];
+        }
+    }
+    for (int a = 0; a < 6; a++) {
+        for (int b = a; b < 6; b++) {
+            mvt_real acc = MVT_R(0.0);
+            for (int j = 0; j < n; j++) {
+                acc += imm->mu[j] * (imm->m[j].P[a * 6 + b] + d[j][a] * d[j][b]);
+            }
+            s->P[a * 6 + b] = acc;
+            s->P[b * 6 + a] = acc;
+        }
+    }
+}
+
+mvt_err_t mvt_imm_predict_to(mvt_imm_t *imm, const mvt_imm_config_t *c, int64_t utime_us, mvt_cv_state_t *s)
+{
+    const int n = c->n;
+    if (utime_us <= imm->m[0].utime_us) {
+        return MVT_OK;
+    }
+    const mvt_real dt = mvt_us_to_s(utime_us - imm->m[0].utime_us);
+    if (!(dt >= MVT_R(0.0)) || !isfinite(dt)) {
+        return MVT_ERR_INVALID;
+    }
+    if (n > 1) {
+        /* transition probabilities over dt: p[i][j] = P(model j at the end | model i at the start) */
+        mvt_real p[MVT_IMM_MODELS][MVT_IMM_MODELS];
+        for (int i = 0; i < n; i++) {
+            const mvt_real stay = MVT_EXP(-c->model[i].leave_hz * dt);
+            for (int j = 0; j < n; j++) {
+                p[i][j] = i == j ? stay : (MVT_R(1.0) - stay) / (mvt_real)(n - 1);
+            }
+        }
+        mvt_real cbar[MVT_IMM_MODELS];
+        mvt_cv_state_t mixed[MVT_IMM_MODELS];
+        for (int j = 0; j < n; j++) {
+            mvt_real cj = MVT_R(0.0);
+            for (int i = 0; i < n; i++) {
+                cj += p[i][j] * imm->mu[i];
+            }
+            cbar[j] = cj;
+            mvt_real w[MVT_IMM_MODELS];
+            for (int i = 0; i < n; i++) {
+                w[i] = cj > MVT_R(0.0) ? p[i][j] * imm->mu[i] / cj : (i == j ? MVT_R(1.0) : MVT_R(0.0));
+            }
+            mvt_cv_state_t *mj = &mixed[j];
+            mj->utime_us = imm->m[j].utime_us;
+            for (int a = 0; a < 6; a++) {
+                mvt_real acc = MVT_R(0.0);
+                for (int i = 0; i < n; i++) {
+                    acc += w[i] * imm->m[i].x[a];
+                }
+                mj->x[a] = acc;
+            }
+            for (int a = 0; a < 6; a++) {
+                for (int b = a; b < 6; b++) {
+                    mvt_real acc = MVT_R(0.0);
+                    for (int i = 0; i < n; i++) {
+                        const mvt_real *xi = imm->m[i].x;
+                        acc += w[i] * (imm->m[i].P[a * 6 + b] + (xi[a] - mj->x[a]) * (xi[b] - mj->x[b]));
+                    }
+                    mj->P[a * 6 + b] = acc;
+                    mj->P[b * 6 + a] = acc;
+                }
+            }
+        }
+        mvt_real sum = MVT_R(0.0);
+        for (int j = 0; j < n; j++) {
+            imm->m[j] = mixed[j];
+            sum += cbar[j];
+        }
+        for (int j = 0; j < n; j++) {
+            imm->mu[j] = cbar[j] / sum;
+        }
+    }
+    for (int j = 0; j < n; j++) {
+        mvt_cv_state_t *mj = &imm->m[j];
+        if (c->model[j].kind == MVT_MOTION_STILL) {
+            predict_still(mj, dt, c->model[j].q);
+        } else {
+            (void)mvt_cv_predict(mj, dt, c->model[j].q);
+        }
+        mj->utime_us = utime_us;
+    }
+    mvt_imm_combine(imm, c, s);
+    return MVT_OK;
+}
+
+/* Per model: the innovation, its covariance and inverse, and the gain rows. */
+typedef struct imm_upd {
+    mvt_real hpP[18]; /* H P_j, m x 6 */
+    mvt_real S[9];    /* m x m */
+    mvt_real Si[9];
+    mvt_real y[3];
+    mvt_real g;       /* Gaussian likelihood N(y; 0, S) */
+    int nx;           /* state rows the measurement reaches: 3 for a standing model (P_pv = 0) */
+} imm_upd_t;
+
+static int innovation(const mvt_cv_state_t *mj, const mvt_cv_state_t *s, int m, const mvt_real *H, const mvt_real *y,
+                      const mvt_real *noise, int nx, imm_upd_t *u)
+{
+    const mvt_real *P = mj->P;
+    const mvt_real dx[3] = {mj->x[0] - s->x[0], mj->x[1] - s->x[1], mj->x[2] - s->x[2]};
+    u->nx = nx;
+    for (int a = 0; a < m; a++) {
+        const mvt_real *h = &H[a * 3];
+        u->y[a] = y[a] - (h[0] * dx[0] + h[1] * dx[1] + h[2] * dx[2]);
+        for (int b = 0; b < nx; b++) {
+            u->hpP[a * 6 + b] = h[0] * P[0 * 6 + b] + h[1] * P[1 * 6 + b] + h[2] * P[2 * 6 + b];
+        }
+    }
+    for (int a = 0; a < m; a++) {
+        for (int b = a; b < m; b++) {
+            const mvt_real *h = &H[b * 3];
+            const mvt_real v = u->hpP[a * 6 + 0] * h[0] + u->hpP[a * 6 + 1] * h[1] + u->hpP[a * 6 + 2] * h[2] +
+                               MVT_R(0.5) * (noise[a * m + b] + noise[b * m + a]);
+            u->S[a * m + b] = v;
+            u->S[b * m + a] = v;
+        }
+    }
+    mvt_real det, d2;
+    if (m == 2) {
+        const mvt_real p2[3] = {u->S[0], u->S[1], u->S[3]};
+        mvt_real i2[3];
+        if (mvt_la_inv2_sym(p2, i2) != MVT_OK) {
+            return 0;
+        }
+        det = p2[0] * p2[2] - p2[1] * p2[1];
+        u->Si[0] = i2[0];
+        u->Si[1] = i2[1];
+        u->Si[2] = i2[1];
+        u->Si[3] = i2[2];
+    } else {
+        mvt_real l[9];
+        memcpy(l, u->S, sizeof(mvt_real) * (size_t)(m * m));
+        if (mvt_la_cholesky(m, l) != MVT_OK) {
+            return 0;
+        }
+        det = MVT_R(1.0);
+        for (int a = 0; a < m; a++) {
+            det *= l[a * m + a] * l[a * m + a];
+        }
+        for (int a = 0; a < m; a++) { /* columns of S^-1 */
+            mvt_real e[3] = {MVT_R(0.0), MVT_R(0.0), MVT_R(0.0)};
+            e[a] = MVT_R(1.0);
+            mvt_la_chol_solve(m, l, e);
+            for (int b = 0; b < m; b++) {
+                u->Si[b * m + a] = e[b];
+            }
+        }
+    }
+    d2 = MVT_R(0.0);
+    for (int a = 0; a < m; a++) {
+        for (int b = 0; b < m; b++) {
+            d2 += u->y[a] * u->Si[a * m + b] * u->y[b];
+        }
+    }
+    /* (2 pi)^(m/2) sqrt(det S) */
+    const mvt_real norm = (m == 2 ? MVT_R(6.283185307179586) : MVT_R(15.749609945722419)) * MVT_SQRT(det);
+    u->g = MVT_EXP(MVT_R(-0.5) * d2) / norm;
+    return isfinite(d2) && isfinite(u->g) && d2 >= MVT_R(0.0);
+}
+
+/* x += w K y; P += w (Joseph increment) + w (1 - w) (K y)(K y)^T over the first nx rows: the
+ * Kalman update for w = 1, and for 0 < w < 1 the update with a detection that is right with
+ * probability w (the PDA filter's one-measurement form). */
+static void apply(mvt_cv_state_t *mj, int m, const imm_upd_t *u, mvt_real w)
+{
+    const int nx = u->nx;
+    mvt_real k[6][3], ks[6][3], d[6];
+    for (int i = 0; i < nx; i++) {
+        d[i] = MVT_R(0.0);
+        for (int a = 0; a < m; a++) {
+            mvt_real acc = MVT_R(0.0);
+            for (int b = 0; b < m; b++) {
+                acc += u->hpP[b * 6 + i] * u->Si[b * m + a];
+            }
+            k[i][a] = acc;
+            d[i] += acc * u->y[a];
+        }
+        mj->x[i] += w * d[i];
+        for (int b = 0; b < m; b++) {
+            mvt_real acc = -u->hpP[b * 6 + i];
+            for (int a = 0; a < m; a++) {
+                acc += k[i][a] * u->S[a * m + b];
+            }
+            ks[i][b] = acc;
+        }
+    }
+    const mvt_real spread = w * (MVT_R(1.0) - w);
+    mvt_real *P = mj->P;
+    for (int i = 0; i < nx; i++) {
+        for (int j = i; j < nx; j++) {
+            mvt_real inc = MVT_R(0.0);
+            for (int b = 0; b < m; b++) {
+                inc += ks[i][b] * k[j][b] - k[i][b] * u->hpP[b * 6 + j];
+            }
+            const mvt_real v = P[i * 6 + j] + w * inc + spread * d[i] * d[j];
+            P[i * 6 + j] = v;
+            P[j * 6 + i] = v;
+        }
+    }
+}
+
+mvt_err_t mvt_imm_update(mvt_imm_t *imm, const mvt_imm_config_t *c, int m, const mvt_real *H, const mvt_real *y,
+                         const mvt_real *noise, mvt_cv_state_t *s)
+{
+    MVT_ASSERT(m >= 1 && m <= 3);
+    const int n = c->n;
+    imm_upd_t u[MVT_IMM_MODELS];
+    /* first every model's innovation, so that a failure changes nothing */
+    for (int j = 0; j < n; j++) {
+        const int nx = c->model[j].kind == MVT_MOTION_STILL ? 3 : 6;
+        if (!innovation(&imm->m[j], s, m, H, y, noise, nx, &u[j])) {
+            return MVT_ERR_NUMERIC;
+        }
+    }
+    /* a pixel detection is the person's with probability 1 - p_outlier, else displaced anywhere
+     * within outlier_radius_px (density 1 / (pi r^2)) */
+    const mvt_real eps = m == 2 ? c->p_outlier : MVT_R(0.0);
+    const mvt_real clutter = eps > MVT_R(0.0)
+                                 ? eps / (MVT_R(3.14159265358979) * c->outlier_radius_px * c->outlier_radius_px)
+                                 : MVT_R(0.0);
+    mvt_real like[MVT_IMM_MODELS], sum = MVT_R(0.0);
+    for (int j = 0; j < n; j++) {
+        like[j] = (MVT_R(1.0) - eps) * u[j].g + clutter;
+        sum += imm->mu[j] * like[j];
+    }
+    for (int j = 0; j < n; j++) {
+        const mvt_real w = like[j] > MVT_R(0.0) ? (MVT_R(1.0) - eps) * u[j].g / like[j] : MVT_R(0.0);
+        apply(&imm->m[j], m, &u[j], eps > MVT_R(0.0) ? w : MVT_R(1.0));
+    }
+    if (n > 1) {
+        if (sum > MVT_R(0.0) && isfinite(sum)) {
+            for (int j = 0; j < n; j++) {
+                imm->mu[j] = imm->mu[j] * like[j] / sum;
+            }
+        } /* else: every model equally far off (likelihoods underflow), no evidence either way */
+    }
+    mvt_imm_combine(imm, c, s);
+    return MVT_OK;
+}
+
+mvt_err_t mvt_imm_truncate_ground(mvt_imm_t *imm, const mvt_imm_config_t *c, const mvt_real H[3], mvt_real value,
+                                  mvt_real extra_var, mvt_real lo, mvt_real hi, mvt_cv_state_t *s)
+{
+    const int n = c->n;
+    mvt_imm_t tmp = *imm;
+    for (int j = 0; j < n; j++) {
+        const mvt_real *xj = tmp.m[j].x;
+        const mvt_real vj = value + H[0] * (xj[0] - s->x[0]) + H[1] * (xj[1] - s->x[1]) + H[2] * (xj[2] - s->x[2]);
+        const mvt_err_t err = mvt_cv_truncate_ground(&tmp.m[j], H, vj, extra_var, lo, hi, NULL);
+        if (err != MVT_OK) {
+            return err;
+        }
+    }
+    *imm = tmp;
+    mvt_imm_combine(imm, c, s);
+    return MVT_OK;
+}
+
+mvt_err_t mvt_imm_repair(mvt_imm_t *imm, const mvt_imm_config_t *c, mvt_cv_state_t *s, mvt_real var_floor)
+{
+    for (int j = 0; j < c->n; j++) {
+        const mvt_err_t err = mvt_cv_repair(&imm->m[j], var_floor);
+        if (err != MVT_OK) {
+            return err;
+        }
+    }
+    mvt_imm_combine(imm, c, s);
+    return mvt_cv_repair(s, var_floor);
+}

@@ -1,0 +1,139 @@
+/*
+ * mvt_imm.h - interacting multiple models (Blom and Bar-Shalom, IEEE TAC 33(8), 1988) over the
+ * constant-velocity state of mvt_cv.
+ *
+ * People walk, stop, turn, stand talking and start again. One white-noise-acceleration model with
+ * one q cannot fit all of it: low, it lags every turn; high, it jitters while people stand. The
+ * IMM runs a small bank of motion models on the same 6-state [X Y Z Vx Vy Vz] and lets the
+ * measurements say which one the person follows:
+ *
+ *   mix      for every model j, its prior is the moment-matched mixture of all models' estimates
+ *            weighted by P(model i before | model j now) = p_ij mu_i / c_j, c_j = sum_i p_ij mu_i
+ *   predict  each model with its own dynamics; mu_j <- c_j
+ *   update   each camera's measurement updates every model (Joseph form); mu_j is multiplied by
+ *            that model's measurement likelihood N(y_j; 0, S_j) and renormalised
+ *   combine  the output (and what gating, occlusion and association use) is the mixture's mean
+ *            and covariance: x = sum mu_j x_j, P = sum mu_j (P_j + (x_j - x)(x_j - x)^T)
+ *
+ * Model kinds:
+ *   MVT_MOTION_CV     constant velocity, white acceleration of density q (m^2/s^3) per axis
+ *                     (mvt_cv_predict)
+ *   MVT_MOTION_STILL  a person standing: the head wanders as a random walk of diffusion q
+ *                     (m^2/s) per axis and has no velocity of its own beyond a sway of variance
+ *                     q / (1 s) that does not persist (F_vv = 0)
+ * Switching is a continuous-time Markov chain: model j is left at rate leave_hz[j] (mean stay
+ * 1 / leave_hz), for any of the other models alike, so over an interval dt
+ * p_jj = exp(-leave_hz dt) and p_jk = (1 - p_jj) / (n - 1). It depends on dt, so the several
+ * predictions of one frame (cameras at different capture times) compose consistently.
+ *
+ * Impulsive noise: a camera's detection may be displaced (an occluded head, the top of a merged
+ * blob, a bad segmentation). Each pixel measurement is therefore modelled as the person's with
+ * probability 1 - p_outlier and as a displaced point within outlier_radius_px otherwise: every
+ * model's likelihood is (1 - p_outlier) N(y_j; 0, S_j) + p_outlier / (pi r^2), and it is updated
+ * with weight w_j = P(right | y_j) (the PDA filter's one-measurement form: x += w K y,
+ * P = P - w K S K^T + w (1 - w) (K y)(K y)^T). A far detection then moves the estimate little and
+ * is no evidence of a manoeuvre (without this, the manoeuvre model explains a wrong blob, widens
+ * the gate and takes the next one).
+ *
+ * Every measurement in the tracker is linearised at the combined estimate (one projection per
+ * camera and track): model j's innovation is y_j = y - H (x_j - x) and its covariance
+ * S_j = H P_j H^T + R. The models differ by millimetres, far inside the range where the
+ * projection is linear, so relinearising each model separately would change nothing measurable
+ * at twice the cost.
+ *
+ * Statically allocated: MVT_IMM_MODELS (default 3) is the bank's capacity; a configuration uses
+ * 1..MVT_IMM_MODELS of them (1 model with leave_hz 0 is exactly the single filter).
+ */
+#ifndef MVT_IMM_H
+#define MVT_IMM_H
+
+#include "mvt_cv.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#ifndef MVT_IMM_MODELS
+#define MVT_IMM_MODELS 3
+#endif
+#if MVT_IMM_MODELS < 1 || MVT_IMM_MODELS > 8
+#error "MVT_IMM_MODELS must be in 1..8"
+#endif
+
+typedef enum mvt_motion_kind {
+    MVT_MOTION_CV = 0,
+    MVT_MOTION_STILL = 1
+} mvt_motion_kind_t;
+
+typedef struct mvt_imm_model {
+    mvt_motion_kind_t kind;
+    mvt_real q[3];      /* CV: acceleration density, m^2/s^3; STILL: diffusion, m^2/s; per axis, > 0 */
+    mvt_real leave_hz;  /* rate of leaving this model, 1/s, >= 0 (0 with one model only) */
+} mvt_imm_model_t;
+
+typedef struct mvt_imm_config {
+    int n;                                /* models in use, 1..MVT_IMM_MODELS */
+    mvt_imm_model_t model[MVT_IMM_MODELS];
+    mvt_real p_outlier;                   /* probability that a camera's detection of a person is
+                                             displaced (occluded head, a merged blob's top, a bad
+                                             segmentation), in [0, 1); default 0.1 */
+    mvt_real outlier_radius_px;           /* ... and then lies anywhere within this radius of the
+                                             head, pixels, > 0; default 150 */
+} mvt_imm_config_t;
+
+typedef struct mvt_imm {
+    mvt_cv_state_t m[MVT_IMM_MODELS]; /* each model's estimate */
+    mvt_real mu[MVT_IMM_MODELS];      /* model probabilities, sum 1 */
+} mvt_imm_t;
+
+/* The default bank for people (docs/filters.md, "Motion that adapts"):
+ *   0 STILL  q 2.5e-5 m^2/s (the head wanders 5 mm in a second), leaves at 0.2 /s (stands 5 s
+ *            on average)
+ *   1 CV     walking: q 0.3 m^2/s^3 horizontally (speed drifts ~0.5 m/s per second), 0.02
+ *            vertically; leaves at 0.3 /s
+ *   2 CV     manoeuvre (turn, start, stop): q 3 m^2/s^3 horizontally (~1.7 m/s^2 for ~1 s),
+ *            0.1 vertically; leaves at 1.5 /s (lasts ~0.7 s) */
+void mvt_imm_config_default(mvt_imm_config_t *c);
+
+/* A one-model bank that is exactly the single constant-velocity filter with q. */
+void mvt_imm_config_single(mvt_imm_config_t *c, const mvt_real q[3]);
+
+/* MVT_OK, or MVT_ERR_INVALID for a count out of range, an unknown kind, a q that is not finite
+ * and > 0, or a leave rate that is not finite and >= 0. */
+mvt_err_t mvt_imm_config_check(const mvt_imm_config_t *c);
+
+/* The chain's stationary probabilities (mean stays 1 / leave_hz, shares proportional to them);
+ * uniform when a rate is 0. */
+void mvt_imm_stationary(const mvt_imm_config_t *c, mvt_real mu[MVT_IMM_MODELS]);
+
+/* Starts every model at s (the combined estimate is s itself); mu at the stationary shares. */
+void mvt_imm_init(mvt_imm_t *imm, const mvt_imm_config_t *c, const mvt_cv_state_t *s);
+
+/* Mixing, per-model prediction to utime_us (no-op unless later than the estimate's time) and the
+ * combined estimate into s. ~(n^2 + 5 n) * 42 flops + n predictions. MVT_ERR_INVALID for a bad
+ * interval. */
+mvt_err_t mvt_imm_predict_to(mvt_imm_t *imm, const mvt_imm_config_t *c, int64_t utime_us, mvt_cv_state_t *s);
+
+/* One position measurement linearised at the combined estimate s: H (m x 3 rows on the position,
+ * row-major), y = z - h(s) (m), noise = R plus any widening (m x m, row-major), m in 1..3.
+ * Every model is updated with y_j = y - H (x_j - x), S_j = H P_j H^T + noise (m = 2: robustly,
+ * with p_outlier); mu by the likelihoods; s recombined. MVT_ERR_NUMERIC (nothing changed) when some S_j is not positive definite. */
+mvt_err_t mvt_imm_update(mvt_imm_t *imm, const mvt_imm_config_t *c, int m, const mvt_real *H, const mvt_real *y,
+                         const mvt_real *noise, mvt_cv_state_t *s);
+
+/* mvt_cv_truncate_ground on every model (value moved by H (x_j - x)), then recombined. The
+ * truncation's mass is not evidence for one motion model over another: mu is left as it is. */
+mvt_err_t mvt_imm_truncate_ground(mvt_imm_t *imm, const mvt_imm_config_t *c, const mvt_real H[3], mvt_real value,
+                                  mvt_real extra_var, mvt_real lo, mvt_real hi, mvt_cv_state_t *s);
+
+/* mvt_cv_repair on every model and on s. */
+mvt_err_t mvt_imm_repair(mvt_imm_t *imm, const mvt_imm_config_t *c, mvt_cv_state_t *s, mvt_real var_floor);
+
+/* The combined estimate of the bank into s (time: model 0's). */
+void mvt_imm_combine(const mvt_imm_t *imm, const mvt_imm_config_t *c, mvt_cv_state_t *s);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* MVT_IMM_H */

@@ -1,0 +1,86 @@
+/*
+ * mvt_trk_motion.c - a track's motion model: every change the tracker makes to a track's
+ * estimate goes through here. With one constant-velocity model the estimate is tr->s itself
+ * (mvt_cv, mvt_pkf: bit for bit the single filter); with an IMM bank (mvt_imm.h) each operation
+ * acts on every model and tr->s is their combination, which is what association, occlusion,
+ * deletion and the output read.
+ */
+#include <string.h>
+
+#include "mvt_linalg.h"
+#include "mvt_trk.h"
+
+static int single(const mvt_tracker_t *self)
+{
+    return self->cfg.motion.n == 1 && self->cfg.motion.model[0].kind == MVT_MOTION_CV;
+}
+
+void mvt_trk_start(mvt_tracker_t *self, mvt_track_t *tr, const mvt_real x[3], const mvt_real cov[9], int64_t utime_us)
+{
+    const mvt_real v = self->cfg.init_vel_std_ms;
+    mvt_cv_init(&tr->s, x, cov, v * v, utime_us);
+    if (!single(self)) {
+        mvt_imm_init(&tr->imm, &self->cfg.motion, &tr->s);
+    }
+}
+
+void mvt_trk_predict(mvt_tracker_t *self, mvt_track_t *tr, int64_t utime_us)
+{
+    if (single(self)) {
+        (void)mvt_cv_predict_to(&tr->s, utime_us, self->cfg.motion.model[0].q);
+    } else {
+        (void)mvt_imm_predict_to(&tr->imm, &self->cfg.motion, utime_us, &tr->s);
+    }
+}
+
+void mvt_trk_predicted(const mvt_tracker_t *self, const mvt_track_t *tr, int64_t utime_us, mvt_cv_state_t *out)
+{
+    *out = tr->s;
+    if (single(self)) {
+        (void)mvt_cv_predict_to(out, utime_us, self->cfg.motion.model[0].q);
+    } else {
+        mvt_imm_t imm = tr->imm;
+        (void)mvt_imm_predict_to(&imm, &self->cfg.motion, utime_us, out);
+    }
+}
+
+mvt_err_t mvt_trk_update_pkf(mvt_tracker_t *self, mvt_track_t *tr, const mvt_pkf_innov_t *in, const mvt_real *extra_px2)
+{
+    if (single(self)) {
+        return mvt_pkf_update(&tr->s, in);
+    }
+    const mvt_real e[3] = {extra_px2 != NULL ? extra_px2[0] : MVT_R(0.0), extra_px2 != NULL ? extra_px2[1] : MVT_R(0.0),
+                           extra_px2 != NULL ? extra_px2[2] : MVT_R(0.0)};
+    const mvt_real noise[4] = {in->r + e[0], e[1], e[1], in->r + e[2]};
+    return mvt_imm_update(&tr->imm, &self->cfg.motion, 2, in->H, in->y, noise, &tr->s);
+}
+
+mvt_err_t mvt_trk_update_point(mvt_tracker_t *self, mvt_track_t *tr, const mvt_real z[3], const mvt_real R[9])
+{
+    if (single(self)) {
+        return mvt_cv_update_point(&tr->s, z, R, MVT_R(0.0), NULL);
+    }
+    if (!mvt_la_all_finite(z, 3) || !mvt_la_all_finite(R, 9)) {
+        return MVT_ERR_NONFINITE;
+    }
+    static const mvt_real eye3[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    const mvt_real y[3] = {z[0] - tr->s.x[0], z[1] - tr->s.x[1], z[2] - tr->s.x[2]};
+    return mvt_imm_update(&tr->imm, &self->cfg.motion, 3, eye3, y, R, &tr->s);
+}
+
+mvt_err_t mvt_trk_truncate_ground(mvt_tracker_t *self, mvt_track_t *tr, const mvt_real H[3], mvt_real value,
+                                  mvt_real extra_var, mvt_real lo, mvt_real hi)
+{
+    if (single(self)) {
+        return mvt_cv_truncate_ground(&tr->s, H, value, extra_var, lo, hi, NULL);
+    }
+    return mvt_imm_truncate_ground(&tr->imm, &self->cfg.motion, H, value, extra_var, lo, hi, &tr->s);
+}
+
+mvt_err_t mvt_trk_repair(mvt_tracker_t *self, mvt_track_t *tr)
+{
+    if (single(self)) {
+        return mvt_cv_repair(&tr->s, self->cfg.var_floor_m2);
+    }
+    return mvt_imm_repair(&tr->imm, &self->cfg.motion, &tr->s, self->cfg.var_floor_m2);
+}
