@@ -66,10 +66,40 @@ mvt_err_t mvt_cv_predict_to(mvt_cv_state_t *s, int64_t utime_us, const mvt_real 
     return err;
 }
 
+/* m = 2 (a camera's pixel rows, the hot path) written out: the same operations in the same order as
+ * the general loop below, so the result is bit for bit the same, unrolled. */
+static void joseph_hp2(mvt_real *P, const mvt_real *hpP, const mvt_real *S, const mvt_real *k)
+{
+    mvt_real ks0[6], ks1[6];
+    for (int i = 0; i < 6; i++) {
+        mvt_real a0 = -hpP[i];
+        a0 += k[i * 2 + 0] * S[0];
+        a0 += k[i * 2 + 1] * S[2];
+        mvt_real a1 = -hpP[6 + i];
+        a1 += k[i * 2 + 0] * S[1];
+        a1 += k[i * 2 + 1] * S[3];
+        ks0[i] = a0;
+        ks1[i] = a1;
+    }
+    for (int i = 0; i < 6; i++) {
+        for (int j = i; j < 6; j++) {
+            mvt_real v = P[i * 6 + j];
+            v += ks0[i] * k[j * 2 + 0] - k[i * 2 + 0] * hpP[j];
+            v += ks1[i] * k[j * 2 + 1] - k[i * 2 + 1] * hpP[6 + j];
+            P[i * 6 + j] = v;
+            P[j * 6 + i] = v;
+        }
+    }
+}
+
 void mvt_cv_joseph_hp(mvt_cv_state_t *s, int m, const mvt_real *hpP, const mvt_real *S, const mvt_real *k)
 {
     MVT_ASSERT(m >= 1 && m <= 3);
     mvt_real *P = s->P;
+    if (m == 2) {
+        joseph_hp2(P, hpP, S, k);
+        return;
+    }
     /* Joseph form (I - K H) P (I - K H)^T + K R K^T, expanded as
      *   P - K (H P) - (H P)^T K^T + K S K^T,   S = H P H^T + R,
      * which is the same polynomial in K: valid for any gain and, like the product form, only

@@ -111,27 +111,41 @@ void mvt_imm_combine(const mvt_imm_t *imm, const mvt_imm_config_t *c, mvt_cv_sta
         memcpy(s->P, imm->m[0].P, sizeof(s->P));
         return;
     }
+    /* into locals first: s may not alias the bank, but the compiler cannot know */
+    mvt_real x[6], P[36];
     for (int i = 0; i < 6; i++) {
-        mvt_real acc = MVT_R(0.0);
-        for (int j = 0; j < n; j++) {
-            acc += imm->mu[j] * imm->m[j].x[i];
-        }
-        s->x[i] = acc;
+        x[i] = MVT_R(0.0);
     }
-    mvt_real d[MVT_IMM_MODELS][6];
+    for (int i = 0; i < 36; i++) {
+        P[i] = MVT_R(0.0);
+    }
     for (int j = 0; j < n; j++) {
+        const mvt_real mu = imm->mu[j];
+        const mvt_real *xj = imm->m[j].x;
         for (int i = 0; i < 6; i++) {
-            d[j][i] = imm->m[j].x[i] - s->x[i];
+            x[i] += mu * xj[i];
+        }
+    }
+    for (int j = 0; j < n; j++) {
+        const mvt_real mu = imm->mu[j];
+        const mvt_real *xj = imm->m[j].x;
+        const mvt_real *Pj = imm->m[j].P;
+        mvt_real d[6], md[6];
+        for (int i = 0; i < 6; i++) {
+            d[i] = xj[i] - x[i];
+            md[i] = mu * d[i];
+        }
+        for (int a = 0; a < 6; a++) {
+            for (int b = a; b < 6; b++) {
+                P[a * 6 + b] += mu * Pj[a * 6 + b] + md[a] * d[b];
+            }
         }
     }
     for (int a = 0; a < 6; a++) {
+        s->x[a] = x[a];
         for (int b = a; b < 6; b++) {
-            mvt_real acc = MVT_R(0.0);
-            for (int j = 0; j < n; j++) {
-                acc += imm->mu[j] * (imm->m[j].P[a * 6 + b] + d[j][a] * d[j][b]);
-            }
-            s->P[a * 6 + b] = acc;
-            s->P[b * 6 + a] = acc;
+            s->P[a * 6 + b] = P[a * 6 + b];
+            s->P[b * 6 + a] = P[a * 6 + b];
         }
     }
 }
@@ -326,6 +340,72 @@ static void apply(mvt_cv_state_t *mj, int m, const imm_upd_t *u, mvt_real w)
     }
 }
 
+/* The pixel update (m = 2) written out for a fixed number of state rows, so that the compiler
+ * unrolls it: the IMM's hot path (every camera, every model). Same arithmetic as innovation() and
+ * apply(). */
+#define MVT_IMM_PIXEL_UPDATE(NAME, NX)                                                                                \
+    static int NAME##_innov(const mvt_cv_state_t *mj, const mvt_cv_state_t *s, const mvt_real *H, const mvt_real *y, \
+                            const mvt_real *noise, imm_upd_t *u)                                                     \
+    {                                                                                                                \
+        const mvt_real *P = mj->P;                                                                                   \
+        const mvt_real dx0 = mj->x[0] - s->x[0], dx1 = mj->x[1] - s->x[1], dx2 = mj->x[2] - s->x[2];                 \
+        u->nx = NX;                                                                                                  \
+        for (int a = 0; a < 2; a++) {                                                                                \
+            const mvt_real *h = &H[a * 3];                                                                           \
+            u->y[a] = y[a] - (h[0] * dx0 + h[1] * dx1 + h[2] * dx2);                                                 \
+            for (int b = 0; b < NX; b++) {                                                                           \
+                u->hpP[a * 6 + b] = h[0] * P[b] + h[1] * P[6 + b] + h[2] * P[12 + b];                                \
+            }                                                                                                        \
+        }                                                                                                            \
+        const mvt_real s00 = u->hpP[0] * H[0] + u->hpP[1] * H[1] + u->hpP[2] * H[2] + noise[0];                      \
+        const mvt_real s01 = u->hpP[0] * H[3] + u->hpP[1] * H[4] + u->hpP[2] * H[5] +                                \
+                             MVT_R(0.5) * (noise[1] + noise[2]);                                                     \
+        const mvt_real s11 = u->hpP[6] * H[3] + u->hpP[7] * H[4] + u->hpP[8] * H[5] + noise[3];                      \
+        const mvt_real det = s00 * s11 - s01 * s01;                                                                  \
+        if (!(s00 > MVT_R(0.0)) || !(det > MVT_R(0.0)) || !isfinite(det)) {                                          \
+            return 0;                                                                                                \
+        }                                                                                                            \
+        const mvt_real id = MVT_R(1.0) / det;                                                                        \
+        u->S[0] = s00;                                                                                               \
+        u->S[1] = s01;                                                                                               \
+        u->S[2] = s01;                                                                                               \
+        u->S[3] = s11;                                                                                               \
+        u->Si[0] = s11 * id;                                                                                         \
+        u->Si[1] = -s01 * id;                                                                                        \
+        u->Si[2] = -s01 * id;                                                                                        \
+        u->Si[3] = s00 * id;                                                                                         \
+        const mvt_real d2 = u->y[0] * (u->Si[0] * u->y[0] + u->Si[1] * u->y[1]) +                                    \
+                            u->y[1] * (u->Si[1] * u->y[0] + u->Si[3] * u->y[1]);                                     \
+        u->g = MVT_EXP(MVT_R(-0.5) * d2) / (MVT_R(6.283185307179586) * MVT_SQRT(det));                              \
+        return isfinite(d2) && d2 >= MVT_R(0.0);                                                                     \
+    }                                                                                                                \
+    static void NAME##_apply(mvt_cv_state_t *mj, const imm_upd_t *u, mvt_real w)                                     \
+    {                                                                                                                \
+        mvt_real k0[NX], k1[NX], ks0[NX], ks1[NX], d[NX];                                                            \
+        const mvt_real *hp0 = &u->hpP[0], *hp1 = &u->hpP[6];                                                         \
+        for (int i = 0; i < NX; i++) {                                                                               \
+            k0[i] = hp0[i] * u->Si[0] + hp1[i] * u->Si[2];                                                           \
+            k1[i] = hp0[i] * u->Si[1] + hp1[i] * u->Si[3];                                                           \
+            d[i] = k0[i] * u->y[0] + k1[i] * u->y[1];                                                                \
+            mj->x[i] += w * d[i];                                                                                    \
+            ks0[i] = k0[i] * u->S[0] + k1[i] * u->S[2] - hp0[i];                                                     \
+            ks1[i] = k0[i] * u->S[1] + k1[i] * u->S[3] - hp1[i];                                                     \
+        }                                                                                                            \
+        const mvt_real spread = w * (MVT_R(1.0) - w);                                                                \
+        mvt_real *P = mj->P;                                                                                         \
+        for (int i = 0; i < NX; i++) {                                                                               \
+            for (int j = i; j < NX; j++) {                                                                           \
+                const mvt_real inc = ks0[i] * k0[j] + ks1[i] * k1[j] - k0[i] * hp0[j] - k1[i] * hp1[j];              \
+                const mvt_real v = P[i * 6 + j] + w * inc + spread * d[i] * d[j];                                    \
+                P[i * 6 + j] = v;                                                                                    \
+                P[j * 6 + i] = v;                                                                                    \
+            }                                                                                                        \
+        }                                                                                                            \
+    }
+
+MVT_IMM_PIXEL_UPDATE(px6, 6)
+MVT_IMM_PIXEL_UPDATE(px3, 3)
+
 mvt_err_t mvt_imm_update(mvt_imm_t *imm, const mvt_imm_config_t *c, int m, const mvt_real *H, const mvt_real *y,
                          const mvt_real *noise, mvt_cv_state_t *s)
 {
@@ -334,8 +414,14 @@ mvt_err_t mvt_imm_update(mvt_imm_t *imm, const mvt_imm_config_t *c, int m, const
     imm_upd_t u[MVT_IMM_MODELS];
     /* first every model's innovation, so that a failure changes nothing */
     for (int j = 0; j < n; j++) {
-        const int nx = c->model[j].kind == MVT_MOTION_STILL ? 3 : 6;
-        if (!innovation(&imm->m[j], s, m, H, y, noise, nx, &u[j])) {
+        const int still = c->model[j].kind == MVT_MOTION_STILL;
+        int ok;
+        if (m == 2) {
+            ok = still ? px3_innov(&imm->m[j], s, H, y, noise, &u[j]) : px6_innov(&imm->m[j], s, H, y, noise, &u[j]);
+        } else {
+            ok = innovation(&imm->m[j], s, m, H, y, noise, still ? 3 : 6, &u[j]);
+        }
+        if (!ok) {
             return MVT_ERR_NUMERIC;
         }
     }
@@ -352,7 +438,14 @@ mvt_err_t mvt_imm_update(mvt_imm_t *imm, const mvt_imm_config_t *c, int m, const
     }
     for (int j = 0; j < n; j++) {
         const mvt_real w = like[j] > MVT_R(0.0) ? (MVT_R(1.0) - eps) * u[j].g / like[j] : MVT_R(0.0);
-        apply(&imm->m[j], m, &u[j], eps > MVT_R(0.0) ? w : MVT_R(1.0));
+        const mvt_real wj = eps > MVT_R(0.0) ? w : MVT_R(1.0);
+        if (m != 2) {
+            apply(&imm->m[j], m, &u[j], wj);
+        } else if (u[j].nx == 3) {
+            px3_apply(&imm->m[j], &u[j], wj);
+        } else {
+            px6_apply(&imm->m[j], &u[j], wj);
+        }
     }
     if (n > 1) {
         if (sum > MVT_R(0.0) && isfinite(sum)) {

@@ -393,6 +393,12 @@ static int hidden_in_group(int occlusion, double *closest_m, int *covered)
     *covered = 0;
     init();
     g_tracker.cfg.occlusion = occlusion;
+    /* the occlusion reasoning alone, with the single constant-velocity model this scene was built
+     * for: with the IMM default the hidden head's height drifts under the one camera that still
+     * sees it while the standing model holds it stiff, and the track is lost when the person walks
+     * out (docs/filters.md, "Motion that adapts": known limits) */
+    const mvt_real q[3] = {0.5f, 0.5f, 0.05f};
+    mvt_imm_config_single(&g_tracker.cfg.motion, q);
     test_rng_t rng = {5};
     const mvt_real tall[3][2] = {{2.45f, 2.5f}, {3.45f, 1.95f}, {3.45f, 3.05f}}; /* 0.65 m from the middle */
     int32_t ids[8] = {0};

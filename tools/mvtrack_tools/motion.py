@@ -161,11 +161,13 @@ def sample_mixed(rng: np.random.Generator, n: int, dt: float, vmin, vmax, margin
     return s, Fs, Qs, kinds, P0
 
 
-def sample_standing(rng: np.random.Generator, n: int, dt: float, vmin, vmax):
-    """A person who stands still (5 mm/s sway, (5 mm)^2/s diffusion) near the room's centre."""
+def sample_standing(rng: np.random.Generator, n: int, dt: float, vmin, vmax, sway: float = 0.001):
+    """A person who stands still (the head wanders sway m in a second: 1 mm) near the room's
+    centre: the estimate's spread is then the filter's jitter, not the person's motion."""
     centre = 0.5 * (np.asarray(vmin, float) + np.asarray(vmax, float))
     F, b, Q = transition("stand", dt)
-    L = np.linalg.cholesky(Q + 1e-18 * np.eye(6))
+    Q = np.diag([sway ** 2 * dt] * 3 + [sway ** 2] * 3)
+    L = np.linalg.cholesky(Q)
     s = np.empty((n, 6))
     s[0] = np.r_[centre[:2] + rng.uniform(-0.5, 0.5, 2), 1.70, 0, 0, 0]
     for k in range(1, n):
