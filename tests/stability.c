@@ -12,6 +12,8 @@
  *   stability --write FILE   (float build) run, check P, write the positions
  *   stability --compare FILE (double build) run, check P, compare with FILE
  *   [--steps N] (default 1000000)
+ *   [--imm]     the IMM (mvt_imm, default bank, robust updates) instead of the single filter:
+ *               every model's P and the combination's are checked, mu must stay a distribution
  *
  * Checked at every step: P symmetric (|Pij - Pji| <= 1e-6 sqrt(Pii Pjj)) and positive definite
  * (Cholesky in double); with --compare, |x_float - x_double| <= 1 mm. Prints the figures; exit
@@ -22,6 +24,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "mvt_imm.h"
 #include "mvt_pkf.h"
 #include "test_support.h"
 
@@ -103,21 +106,23 @@ static int spd(const mvt_real *P, double *asym)
 int main(int argc, char **argv)
 {
     const char *path = NULL;
-    int compare = 0;
+    int compare = 0, use_imm = 0;
     long steps = 1000000;
     for (int i = 1; i < argc; i++) {
         if ((!strcmp(argv[i], "--write") || !strcmp(argv[i], "--compare")) && i + 1 < argc) {
             compare = !strcmp(argv[i], "--compare");
             path = argv[++i];
+        } else if (!strcmp(argv[i], "--imm")) {
+            use_imm = 1;
         } else if (!strcmp(argv[i], "--steps") && i + 1 < argc) {
             steps = strtol(argv[++i], NULL, 10);
         } else {
-            fprintf(stderr, "usage: %s (--write FILE | --compare FILE) [--steps N]\n", argv[0]);
+            fprintf(stderr, "usage: %s (--write FILE | --compare FILE) [--steps N] [--imm]\n", argv[0]);
             return 2;
         }
     }
     if (path == NULL || steps < 1) {
-        fprintf(stderr, "usage: %s (--write FILE | --compare FILE) [--steps N]\n", argv[0]);
+        fprintf(stderr, "usage: %s (--write FILE | --compare FILE) [--steps N] [--imm]\n", argv[0]);
         return 2;
     }
     FILE *fh = fopen(path, compare ? "rb" : "wb");
@@ -162,6 +167,11 @@ int main(int argc, char **argv)
     const mvt_real c0[9] = {(mvt_real)0.01f, 0, 0, 0, (mvt_real)0.01f, 0, 0, 0, (mvt_real)0.01f};
     mvt_cv_state_t s;
     mvt_cv_init(&s, p0, c0, (mvt_real)1.0f, 0);
+    mvt_imm_config_t icfg;
+    mvt_imm_config_default(&icfg);
+    mvt_imm_t imm;
+    mvt_imm_init(&imm, &icfg, &s);
+    long bad_mu = 0;
     int occluded_until[NCAM] = {0}, blind_until = 0;
     long bad_spd = 0, bad_sym = 0, bad_diff = 0, updates = 0, coasted = 0;
     double worst_asym = 0, worst_diff = 0, se = 0, worst_err = 0, max_std = 0;
@@ -195,23 +205,46 @@ int main(int argc, char **argv)
             if (n < blind_until || n < occluded_until[k] || miss || !project_d(&gen[k], X, uv)) {
                 continue;
             }
-            (void)mvt_cv_predict_to(&s, tk[k], q);
+            if (use_imm) {
+                (void)mvt_imm_predict_to(&imm, &icfg, tk[k], &s);
+            } else {
+                (void)mvt_cv_predict_to(&s, tk[k], q);
+            }
             const mvt_real z[2] = {(mvt_real)(float)(uv[0] + nu), (mvt_real)(float)(uv[1] + nv)};
             mvt_pkf_meas_t m;
             mvt_pkf_innov_t in;
+            const mvt_real noise[4] = {(mvt_real)4.0f, 0, 0, (mvt_real)4.0f};
             if (mvt_pkf_meas_make(&cams[k], z, (mvt_real)2.0f, &m) == MVT_OK &&
-                mvt_pkf_innovation(&s, &cams[k], MVT_PKF_JACOBIAN, &m, &in) == MVT_OK && mvt_pkf_update(&s, &in) == MVT_OK) {
+                mvt_pkf_innovation(&s, &cams[k], MVT_PKF_JACOBIAN, &m, &in) == MVT_OK &&
+                (use_imm ? mvt_imm_update(&imm, &icfg, 2, in.H, in.y, noise, &s) : mvt_pkf_update(&s, &in)) == MVT_OK) {
                 updates++;
                 seen++;
             } else if (getenv("STAB_DEBUG")) {
                 fprintf(stderr, "step %ld cam %d: update refused\n", n, k);
             }
         }
-        (void)mvt_cv_predict_to(&s, t_us + 5000, q);
+        if (use_imm) {
+            (void)mvt_imm_predict_to(&imm, &icfg, t_us + 5000, &s);
+        } else {
+            (void)mvt_cv_predict_to(&s, t_us + 5000, q);
+        }
         coasted += seen == 0;
         double asym;
         if (!spd(s.P, &asym)) {
             if (bad_spd++ < 5) fprintf(stderr, "step %ld: P not positive definite\n", n);
+        }
+        if (use_imm) {
+            double musum = 0;
+            for (int j = 0; j < icfg.n; j++) {
+                double aj;
+                if (!spd(imm.m[j].P, &aj)) {
+                    if (bad_spd++ < 5) fprintf(stderr, "step %ld: model %d's P not positive definite\n", n, j);
+                }
+                asym = aj > asym ? aj : asym;
+                musum += (double)imm.mu[j];
+                if (!(imm.mu[j] >= 0)) bad_mu++;
+            }
+            if (fabs(musum - 1.0) > 1e-4) bad_mu++;
         }
         worst_asym = asym > worst_asym ? asym : worst_asym;
         if (asym > 1e-6) bad_sym++;
@@ -247,5 +280,8 @@ int main(int argc, char **argv)
     if (compare) {
         printf("  float vs double position: worst %.4f mm (%ld steps > 1 mm)\n", 1e3 * worst_diff, bad_diff);
     }
-    return bad_spd == 0 && bad_sym == 0 && bad_diff == 0 ? 0 : 1;
+    if (use_imm) {
+        printf("  IMM (%d models): model probabilities not a distribution: %ld steps\n", icfg.n, bad_mu);
+    }
+    return bad_spd == 0 && bad_sym == 0 && bad_diff == 0 && bad_mu == 0 ? 0 : 1;
 }
