@@ -147,6 +147,66 @@ def main():
         P = IKH @ P @ IKH.T + K @ (np.eye(2) * sig ** 2) @ K.T
     out.append(f"#define MCU_PKF_SIGMA {sig}f\n" + arr("pkf_z", zs) + arr("pkf_x", x) + arr("pkf_P", P))
 
+    # IMM (the default bank: standing / walking / manoeuvring, robust PDA-form pixel updates):
+    # the textbook recursion in numpy, each model's EKF linearised at its own estimate; a person
+    # stands, walks off and turns, 60 frames, 4 cameras, one displaced detection now and then
+    bank = [("still", [2.5e-5] * 3, 0.2), ("cv", [0.3, 0.3, 0.02], 0.3), ("cv", [3.0, 3.0, 0.1], 1.5)]
+    eps, rad = 0.1, 150.0
+    nm = len(bank)
+    xs0 = np.array([2.6, 2.4, 1.7, 0.0, 0.0, 0.0])
+    P0 = np.diag([0.01, 0.01, 0.01, 0.25, 0.25, 0.25])
+    xm = [xs0.copy() for _ in range(nm)]
+    Pm = [P0.copy() for _ in range(nm)]
+    inv_leave = np.array([1 / b[2] for b in bank])
+    mu = inv_leave / inv_leave.sum()
+    out.append(arr("imm_x0", xs0) + arr("imm_P0", P0))
+    NI, dt = 60, 0.04
+    truth = np.array([2.6, 2.4, 1.7])
+    zs = []
+    for n in range(NI):
+        t = (n + 1) * dt
+        v = np.zeros(3) if t < 0.8 else (np.array([1.0, 0, 0]) if t < 1.6 else np.array([0, 1.0, 0]))
+        truth = truth + dt * v
+        p = np.array([[np.exp(-bank[i][2] * dt) if i == j else (1 - np.exp(-bank[i][2] * dt)) / (nm - 1)
+                       for j in range(nm)] for i in range(nm)])
+        c = p.T @ mu
+        x0 = [sum(p[i, j] * mu[i] / c[j] * xm[i] for i in range(nm)) for j in range(nm)]
+        Pmix = [sum(p[i, j] * mu[i] / c[j] * (Pm[i] + np.outer(xm[i] - x0[j], xm[i] - x0[j])) for i in range(nm))
+                for j in range(nm)]
+        for j, (kind, q, _) in enumerate(bank):
+            if kind == "still":
+                F = np.eye(6); F[3:, 3:] = 0
+                Q = np.diag([q[0] * dt, q[1] * dt, q[2] * dt, q[0], q[1], q[2]])
+            else:
+                F = F_of(dt); Q = q_block(q, dt)
+            xm[j] = F @ x0[j]
+            Pm[j] = F @ Pmix[j] @ F.T + Q
+        mu = c
+        for k, cam in enumerate(cams):
+            z = project(cam, truth)[0] + rng.normal(0, sig, 2)
+            if (n + k) % 11 == 0:
+                z = z + np.array([15.0, -10.0])
+            zs.append(z)
+            like = np.zeros(nm)
+            for j in range(nm):
+                h = project(cam, xm[j][:3])[0]
+                J = np.zeros((2, 3))
+                for d in range(3):
+                    e = np.zeros(3); e[d] = 1e-6
+                    J[:, d] = (project(cam, xm[j][:3] + e)[0] - project(cam, xm[j][:3] - e)[0]) / 2e-6
+                Hm = np.hstack([J, np.zeros((2, 3))])
+                S = Hm @ Pm[j] @ Hm.T + np.eye(2) * sig ** 2
+                K = Pm[j] @ Hm.T @ np.linalg.inv(S)
+                y = z - h
+                g = np.exp(-0.5 * y @ np.linalg.solve(S, y)) / (2 * np.pi * np.sqrt(np.linalg.det(S)))
+                like[j] = (1 - eps) * g + eps / (np.pi * rad * rad)
+                w = (1 - eps) * g / like[j]
+                xm[j] = xm[j] + w * K @ y
+                Pm[j] = Pm[j] - w * K @ S @ K.T + w * (1 - w) * np.outer(K @ y, K @ y)
+            mu = mu * like / (mu @ like)
+    xc = sum(mu[j] * xm[j] for j in range(nm))
+    out.append(f"#define MCU_NIMM {NI}\n" + arr("imm_z", zs) + arr("imm_x", xc) + arr("imm_mu", mu))
+
     # assignment: random gated cost matrices with a miss column per row, optimum by enumeration
     NA = 30
     mats, dims, best = [], [], []

@@ -18,6 +18,7 @@
 #include "mcu_rt.h"
 #include "mcu_vectors.h"
 #include "mvt_assoc.h"
+#include "mvt_imm.h"
 #include "mvt_pf.h"
 #include "mvt_tracker.h"
 
@@ -140,6 +141,39 @@ static void test_pkf(void)
         check(rel(s.P[i * 7], pkf_P[i * 7]) < 1e-2f, "projective covariance vs numpy (rel)", s.P[i * 7], pkf_P[i * 7]);
     }
     report("filter: projective update (4 views) vs numpy EKF, worst state", f0, "", worst, 7);
+}
+
+static void test_imm(void)
+{
+    const int f0 = g_fail;
+    mvt_imm_config_t cfg;
+    mvt_imm_config_default(&cfg);
+    mvt_cv_state_t s;
+    state_from(&s, imm_x0, imm_P0);
+    static mvt_imm_t imm;
+    mvt_imm_init(&imm, &cfg, &s);
+    for (int n = 0; n < MCU_NIMM; n++) {
+        check(mvt_imm_predict_to(&imm, &cfg, (int64_t)(n + 1) * 40000, &s) == MVT_OK, "imm predict", 0, 0);
+        for (int k = 0; k < MCU_NCAM; k++) {
+            mvt_pkf_meas_t m;
+            mvt_pkf_innov_t in;
+            check(mvt_pkf_meas_make(&g_cams[k], &imm_z[2 * (n * MCU_NCAM + k)], MCU_PKF_SIGMA, &m) == MVT_OK, "meas_make",
+                  0, 0);
+            check(mvt_pkf_innovation(&s, &g_cams[k], MVT_PKF_JACOBIAN, &m, &in) == MVT_OK, "innovation", 0, 0);
+            const mvt_real noise[4] = {in.r, 0, 0, in.r};
+            check(mvt_imm_update(&imm, &cfg, 2, in.H, in.y, noise, &s) == MVT_OK, "imm update", 0, 0);
+        }
+    }
+    float worst = 0.0f;
+    for (int i = 0; i < 3; i++) {
+        const float e = fabsf(s.x[i] - imm_x[i]);
+        worst = fmaxf(worst, e);
+        check(e < 1e-4f, "IMM vs numpy textbook IMM (position)", e, 1e-4f);
+    }
+    for (int j = 0; j < cfg.n; j++) {
+        check(fabsf(imm.mu[j] - imm_mu[j]) < 0.01f, "IMM model probability vs numpy", imm.mu[j], imm_mu[j]);
+    }
+    report("filter: IMM (3 models, robust) 60 frames x 4 views vs numpy textbook IMM, worst position", f0, "", worst, 7);
 }
 
 static mvt_assoc_ws_t g_ws;
@@ -383,6 +417,7 @@ int main(void)
     test_camera();
     test_cv_filter();
     test_pkf();
+    test_imm();
     test_assoc();
     test_tracker();
     test_pf();
