@@ -102,7 +102,7 @@ def main(argv: list[str] | None = None) -> int:
 
     print(f"[demo] mvtrackd live on {a.url}, 5 cameras, {a.seconds:g} s at 25 fps, sigma^2 = {a.var:g} px^2"
           f"{', occlusion bursts' if occ else ''}")
-    with LiveDaemon(rig_path, a.url, out, log_path, ["--q", qs]):
+    with LiveDaemon(rig_path, a.url, out, log_path, []):  # the defaults: the IMM, nothing learnt
         pub = LivePublisher(a.url)
         t0 = time.monotonic()
         write_scene(pub, rig, states, dets, a.var, progress=True)
@@ -126,12 +126,13 @@ def main(argv: list[str] | None = None) -> int:
     sc = read_log(str(log_path), lambda c: c == "GROUND_TRUTH")
     paths = {}
     print("[demo] offline replay of the recorded detections:")
-    print("        mode         mean (mm)  std (mm)  matched")
-    for mode in ("pkf", "pkf-paper", "pkf-centred", "kf"):
+    print(f"        (pkf: the defaults; the others with q learnt from ground truth: {qs})")
+    print("        mode           mean (mm)  std (mm)  matched")
+    for mode in ("pkf", "pkf-learnt-q", "pkf-paper", "pkf-centred", "kf"):
         tr = out / f"replay_{mode}.lcm"
         run_daemon(rig_path, log_path, tr, mode, q)
         rr = evaluate_single(str(log_path), str(tr), rig, None)
-        print(f"        {mode:<12} {rr.mean_mm:9.1f} {rr.std_mm:9.1f}  {rr.matched}/{rr.frames}")
+        print(f"        {mode:<14} {rr.mean_mm:7.1f} {rr.std_mm:9.1f}  {rr.matched}/{rr.frames}")
         gt, est, _ = match_single(read_log(str(tr), lambda c: c == "TRACKS"), sc)
         paths[mode] = est
     gt, est_live, utimes = match_single(live, sc)
