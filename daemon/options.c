@@ -99,7 +99,9 @@ static void usage(FILE *f)
 static int parse_models(const char *s, mvt_imm_config_t *c)
 {
     mvt_imm_config_t out;
-    memset(&out, 0, sizeof(out));
+    mvt_imm_config_default(&out); /* the outlier model stays; the bank is replaced */
+    out.n = 0;
+    memset(out.model, 0, sizeof(out.model));
     const char *p = s;
     while (*p != '\0') {
         if (out.n == MVT_IMM_MODELS) {

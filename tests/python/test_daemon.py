@@ -93,6 +93,29 @@ def test_daemon_exp1_with_occlusions_keeps_the_track(tmp_path, daemon_path):
     assert r.mean_mm < 120
 
 
+def test_daemon_motion_options(tmp_path, daemon_path):
+    """--motion-models with the default bank spelt out gives the default's TRACKS bit for bit; a
+    bank that differs gives other TRACKS; --motion cv equals --q with the default q; --q with
+    --motion imm, a bad bank and a bad --motion are refused with exit 2."""
+    rig, rp, sp = make_exp1(tmp_path, 100.0, True, 8.0, seed=31)
+    outs = {}
+    for name, args in (("default", []),
+                       ("spelt", ["--motion-models", "still:2.5e-5:2.5e-5:0.2;cv:0.3:0.02:0.3;cv:3:0.1:1.5"]),
+                       ("other", ["--motion-models", "still:1e-4:1e-4:0.2;cv:1:0.05:0.2"]),
+                       ("cv", ["--motion", "cv"]), ("q", ["--q", "0.5,0.5,0.05"])):
+        out = tmp_path / f"{name}.lcm"
+        run(daemon_path, rp, sp, out, *args)
+        outs[name] = tracks_without_publish_time(out)
+    assert outs["spelt"] == outs["default"]
+    assert outs["other"] != outs["default"]
+    assert outs["cv"] == outs["q"] and outs["cv"] != outs["default"]
+    for bad in (["--motion", "imm", "--q", "1,1,1"], ["--motion-models", "cv:1:x"], ["--motion-models", "walk:1:1:1"],
+                ["--motion-models", "cv:-1:1:1"], ["--motion", "fast"]):
+        r = run(daemon_path, rp, sp, tmp_path / "bad.lcm", *bad, check=False)
+        assert r.returncode == 2, (bad, r.stderr)
+        assert "mvtrackd:" in r.stderr
+
+
 def tracks_without_publish_time(path: Path) -> list[bytes]:
     out = []
     for ev in lcm.EventLog(str(path), "r"):
