@@ -189,6 +189,17 @@ static void test_mvt_cam_project_matches_opencv(void **state)
     print_message("# %d in-picture OpenCV projections lay beyond the fold and were refused\n", g_folded);
 }
 
+/* n random cameras (no extreme lenses) for the core and for the oracle. */
+static void random_rig(std::mt19937 &g, int n, std::vector<mvt_camera_t> &cams, std::vector<OracleCam> &oc)
+{
+    const auto ps = random_params(g, n, false);
+    cams.resize((size_t)n);
+    for (int k = 0; k < n; k++) {
+        assert_int_equal(mvt_cam_init(&cams[(size_t)k], &ps[(size_t)k]), MVT_OK);
+        oc.push_back(oracle_of(ps[(size_t)k]));
+    }
+}
+
 /* The oracle filter: the paper's 8x8 form in Eigen double. */
 struct OracleFilter {
     Vec8 s;
@@ -256,13 +267,9 @@ static void test_mvt_pkf_update_sequence_matches_eigen_oracle(void **state)
     (void)state;
     std::mt19937 g(11);
     std::normal_distribution<double> N(0, 1);
-    const auto ps = random_params(g, 5, false);
-    std::vector<mvt_camera_t> cams(5);
+    std::vector<mvt_camera_t> cams;
     std::vector<OracleCam> oc;
-    for (int k = 0; k < 5; k++) {
-        assert_int_equal(mvt_cam_init(&cams[k], &ps[k]), MVT_OK);
-        oc.push_back(oracle_of(ps[k]));
-    }
+    random_rig(g, 5, cams, oc);
     const double q[3] = {0.6, 0.4, 0.03};
     const mvt_real qr[3] = {(mvt_real)q[0], (mvt_real)q[1], (mvt_real)q[2]};
     for (int lin = 0; lin < 3; lin++) {
@@ -403,13 +410,9 @@ static void test_mvt_imm_matches_eigen_textbook_imm(void **state)
     (void)state;
     std::mt19937 g(5);
     std::normal_distribution<double> N(0, 1);
-    const auto ps = random_params(g, 5, false);
-    std::vector<mvt_camera_t> cams(5);
+    std::vector<mvt_camera_t> cams;
     std::vector<OracleCam> oc;
-    for (int k = 0; k < 5; k++) {
-        assert_int_equal(mvt_cam_init(&cams[k], &ps[k]), MVT_OK);
-        oc.push_back(oracle_of(ps[k]));
-    }
+    random_rig(g, 5, cams, oc);
   for (int robust = 0; robust < 2; robust++) {
     mvt_imm_config_t cfg;
     mvt_imm_config_default(&cfg);

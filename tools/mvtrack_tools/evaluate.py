@@ -46,19 +46,25 @@ def pcrlb_position_mse(rig: Rig, model: WalkModel, pos: np.ndarray, var_px2: flo
                        seen: np.ndarray | None = None) -> np.ndarray:
     """Per-frame bound on E|p - p_hat|^2 (m^2) for the linear-Gaussian walk observed by the rig
     with pixel noise var_px2; seen[f, k] says whether camera k measured frame f (default: the
-    head projects into the image). J_{k+1} = (Q + F J_k^-1 F^T)^-1 + sum H^T R^-1 H."""
-    dt = 1.0 / rig.frame_rate
-    F, Q, _ = model.transition(dt)
+    head projects into the image)."""
+    F, Q, _ = model.transition(1.0 / rig.frame_rate)
     n = len(pos)
     if seen is None:
         seen = np.zeros((n, len(rig.cameras)), dtype=bool)
         for k, cam in enumerate(rig.cameras):
             seen[:, k] = (cam.depth(pos) > 0.2) & cam.in_image(cam.project(pos))
-    J = np.linalg.inv(model.stationary_cov())
-    out = np.empty(n)
-    for f in range(n):
+    return pcrlb_known(rig, pos, [F] * n, [Q] * n, model.stationary_cov(), var_px2, seen)
+
+
+def pcrlb_known(rig: Rig, pos: np.ndarray, Fs, Qs, P0: np.ndarray, var_px2: float, seen: np.ndarray) -> np.ndarray:
+    """Per-frame bound on E|p - p_hat|^2 (m^2) of a linear-Gaussian motion with the frame's
+    transition F_k, Q_k (from frame k-1) observed by the cameras seen[k] with pixel noise
+    var_px2: J_{k+1} = (Q_k + F_k J_k^-1 F_k^T)^-1 + sum H^T R^-1 H (Tichavsky et al.)."""
+    J = np.linalg.inv(P0)
+    out = np.empty(len(pos))
+    for f in range(len(pos)):
         if f > 0:
-            J = np.linalg.inv(Q + F @ np.linalg.inv(J) @ F.T)
+            J = np.linalg.inv(Qs[f] + Fs[f] @ np.linalg.inv(J) @ Fs[f].T)
         for k, cam in enumerate(rig.cameras):
             if seen[f, k]:
                 H = cam.project_jacobian(pos[f])

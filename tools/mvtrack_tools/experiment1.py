@@ -30,7 +30,8 @@ LEVELS = [50.0, 100.0, 150.0, 200.0, 250.0, 300.0]
 MODES = ["pkf", "pkf-learnt-q", "pkf-paper", "pkf-centred", "kf"]
 
 
-def run_daemon(rig: Path, scene: Path, out: Path, mode: str, q: np.ndarray, extra: list[str] | None = None) -> None:
+def run_daemon(rig: Path, scene: Path, out: Path, mode: str, q: np.ndarray | None,
+               extra: list[str] | None = None) -> None:
     """`pkf` is the daemon's default (the IMM, nothing learnt); `pkf-learnt-q` the single
     constant-velocity PKF with q learnt from ground truth; the paper's variants and the baseline
     use the learnt q as the paper does."""

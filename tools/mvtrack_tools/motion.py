@@ -15,10 +15,11 @@ Segments (horizontal axes; the height has its own):
   turn    a manoeuvre: white acceleration 2 m^2/s^3 for 0.5-0.8 s (a sharp turn, a start from
           standing, a change of pace)
   stop    velocity relaxes to 0 with time constant 0.25 s (1 s), then stand
-  sit     the head goes down (up for rise) at 0.6 +- 0.3 m/s for 0.75 s (time constant 0.15 s), then sits
+  sit     the head goes down (up for rise) at 0.6 +- 0.15 m/s for 0.75 s (time constant 0.15 s), then sits
           (stand) for 4-10 s and rises the same way
 Each segment is redrawn (up to 200 times) until the head stays in the room (minus a margin) and
-below 2 m/s; this conditions the noise a little, as Experiment 1's path rejection does.
+below 2 m/s, else replaced by a stop, else by standing still; this conditions the noise a little,
+as Experiment 1's path rejection does.
 """
 from __future__ import annotations
 
@@ -52,7 +53,7 @@ WALK_Q = 0.05
 WALK_Z_DIFF = 0.01 ** 2
 TURN_Q = 2.0
 STOP_TAU = 0.25
-SIT_SPEED, SIT_SPEED_STD, SIT_TAU, SIT_S = 0.6, 0.3, 0.15, 0.75
+SIT_SPEED, SIT_SPEED_STD, SIT_TAU, SIT_S = 0.6, 0.15, 0.15, 0.75
 
 
 def still_axis(diff: float, sway: float, dt: float):
@@ -129,27 +130,30 @@ def sample_mixed(rng: np.random.Generator, n: int, dt: float, vmin, vmax, margin
         if not pending:
             pending = next_segments(rng, last, dt, seated)
         seg = pending.pop(0)
-        F, b, Q = transition(seg.kind, dt, seg.sit_dir)
-        L = np.linalg.cholesky(Q + 1e-18 * np.eye(6))
         m = min(seg.frames, n - f0)
-        for _ in range(tries):
-            x = s[f0 - 1].copy()
-            out = np.empty((m, 6))
-            for k in range(m):
-                x = F @ x + b + L @ rng.standard_normal(6)
-                out[k] = x
-            if np.all(out[:, :2] >= lo) and np.all(out[:, :2] <= hi) and np.all(np.hypot(out[:, 3], out[:, 4]) < 2.0):
-                break
-        else:  # no draw stays inside: stop instead
-            seg = Segment("stop", m)
-            pending = []
-            F, b, Q = transition("stop", dt)
+        out = None
+        # the segment as planned; else a stop; else standing still where the head is (its
+        # velocity is forgotten at once, so it cannot overshoot)
+        for kind in (seg.kind, "stop", "stand"):
+            if kind != seg.kind:
+                seg = Segment(kind, m)
+                pending = []
+            F, b, Q = transition(seg.kind, dt, seg.sit_dir)
             L = np.linalg.cholesky(Q + 1e-18 * np.eye(6))
-            x = s[f0 - 1].copy()
-            out = np.empty((m, 6))
-            for k in range(m):
-                x = F @ x + b + L @ rng.standard_normal(6)
-                out[k] = x
+            for _ in range(tries):
+                x = s[f0 - 1].copy()
+                draw = np.empty((m, 6))
+                for k in range(m):
+                    x = F @ x + b + L @ rng.standard_normal(6)
+                    draw[k] = x
+                if (np.all(draw[:, :2] >= lo) and np.all(draw[:, :2] <= hi)
+                        and np.all(np.hypot(draw[:, 3], draw[:, 4]) < 2.0)):
+                    out = draw
+                    break
+            if out is not None:
+                break
+        if out is None:
+            raise RuntimeError("could not continue a mixed-motion path inside the room")
         s[f0:f0 + m] = out
         Fs += [F] * m
         Qs += [Q] * m
@@ -174,19 +178,3 @@ def sample_standing(rng: np.random.Generator, n: int, dt: float, vmin, vmax, swa
         s[k] = F @ s[k - 1] + b + L @ rng.standard_normal(6)
     P0 = np.diag([0.01 ** 2] * 3 + [0.01 ** 2] * 3)
     return s, [F] * n, [Q] * n, P0
-
-
-def pcrlb_known(rig, pos: np.ndarray, Fs, Qs, P0: np.ndarray, var_px2: float, seen: np.ndarray) -> np.ndarray:
-    """Per-frame bound on E|p - p_hat|^2 (m^2) given the transitions: J_{k+1} = (Q_k + F_k
-    J_k^-1 F_k^T)^-1 + sum H^T R^-1 H over the cameras that measured frame k."""
-    J = np.linalg.inv(P0)
-    out = np.empty(len(pos))
-    for f in range(len(pos)):
-        if f > 0:
-            J = np.linalg.inv(Qs[f] + Fs[f] @ np.linalg.inv(J) @ Fs[f].T)
-        for k, cam in enumerate(rig.cameras):
-            if seen[f, k]:
-                H = cam.project_jacobian(pos[f])
-                J[:3, :3] += H.T @ H / var_px2
-        out[f] = np.trace(np.linalg.inv(J)[:3, :3])
-    return out

@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import subprocess
 import sys
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -30,7 +29,8 @@ from pathlib import Path
 import numpy as np
 
 from . import motion
-from .evaluate import learn_q, match_single, pcrlb_position_mse
+from .evaluate import learn_q, match_single, pcrlb_known
+from .experiment1 import run_daemon
 from .lcmio import LogWriter, read_log
 from .paths import DAEMON
 from .progress import bar as progress_bar
@@ -83,14 +83,6 @@ def draw(kind: str, rig: Rig, seconds: float, seed: int):
     return states, Fs, Qs, P0, rng
 
 
-def run_daemon(rig_path: Path, scene: Path, out: Path, args: list[str]) -> None:
-    cmd = [str(DAEMON), "--rig", str(rig_path), "--mode", "pkf", "--in", f"file://{scene}?speed=0",
-           "--out", f"file://{out}?mode=w"] + args
-    r = subprocess.run(cmd, capture_output=True, text=True)
-    if r.returncode != 0:
-        raise RuntimeError(f"{' '.join(cmd)} failed ({r.returncode}): {r.stderr}")
-
-
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="mvtrack motion", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -140,16 +132,16 @@ def main(argv: list[str] | None = None) -> int:
         truth = read_log(str(scene), lambda c: c == "GROUND_TRUTH")
         clean = np.array([[any(t for (_, _, t) in dets[f][k]) for k in range(len(rig.cameras))]
                           for f in range(len(states))])
-        bound = motion.pcrlb_known(rig, states[:, :3], Fs, Qs, P0, var, clean)
+        bound = pcrlb_known(rig, states[:, :3], Fs, Qs, P0, var, clean)
         res = {}
         for v in a.variants:
             args = VARIANTS[v]
-            if args is None:
-                key = kind if kind != "stand" else ("mixed" if "mixed" in a.kinds else a.kinds[0])
-                q = learnt[(name, key)]
-                args = ["--q", ",".join(f"{x:.6g}" for x in q)]
             tr = out / "logs" / f"tracks_{tag}_{v}.lcm"
-            run_daemon(rig_paths[name], scene, tr, args + extra)
+            if args is None:  # the single model with the learnt q
+                key = kind if kind != "stand" else ("mixed" if "mixed" in a.kinds else a.kinds[0])
+                run_daemon(rig_paths[name], scene, tr, "pkf-learnt-q", learnt[(name, key)], extra)
+            else:
+                run_daemon(rig_paths[name], scene, tr, "pkf", None, args + extra)
             gt, est, _ = match_single(read_log(str(tr), lambda c: c == "TRACKS"), truth)
             res[v] = (gt, est)
         return job, res, bound
