@@ -482,12 +482,13 @@ int main(int argc, char **argv)
             ei.m[j].x << truth[0], truth[1], truth[2], 0, 0, 0;
             ei.m[j].P = Mat6::Identity() * 1e-3f;
             ei.m[j].P.bottomRightCorner<3, 3>() = Eigen::Matrix3f::Identity() * 0.25f;
-            ei.mu[j] = imm.mu[j];
             ei.leave[j] = icfg.model[j].leave_hz;
             ei.q[j] << icfg.model[j].q[0], icfg.model[j].q[1], icfg.model[j].q[2];
             ei.still[j] = icfg.model[j].kind == MVT_MOTION_STILL;
         }
-        mvt_imm_stationary(&icfg, ei.mu);
+        mvt_real mu0[MVT_IMM_MODELS];
+        mvt_imm_stationary(&icfg, mu0);
+        for (int j = 0; j < 3; j++) ei.mu[j] = (float)mu0[j];
         measure("filter_update_5cam_imm.eigen_tuned", 100000, runs, [&](int i) {
             ei.step(0.04f, ec.data(), z, 9.0f);
             if ((i & 1023) == 0) g_sink += ei.xc(0);
