@@ -38,11 +38,13 @@
  * Every measurement in the tracker is linearised at the combined estimate (one projection per
  * camera and track): model j's innovation is y_j = y - H (x_j - x) and its covariance
  * S_j = H P_j H^T + R. The models differ by millimetres, far inside the range where the
- * projection is linear, so relinearising each model separately would change nothing measurable
- * at twice the cost.
+ * projection is linear: against a textbook IMM that relinearises every model at its own estimate
+ * the combined position differs by 20 um over 200 frames (tests/test_oracle.cpp), and this way
+ * each camera is projected once per track, not once per model.
  *
  * Statically allocated: MVT_IMM_MODELS (default 3) is the bank's capacity; a configuration uses
- * 1..MVT_IMM_MODELS of them (1 model with leave_hz 0 is exactly the single filter).
+ * 1..MVT_IMM_MODELS of them (mvt_imm_config_single, one model and p_outlier 0, is exactly the
+ * single filter).
  */
 #ifndef MVT_IMM_H
 #define MVT_IMM_H
