@@ -234,6 +234,8 @@ typedef struct imm_upd {
     int nx;           /* state rows the measurement reaches: 3 for a standing model (P_pv = 0) */
 } imm_upd_t;
 
+/* The point update (m = 3, --mode kf's triangulated point): the general form. The pixel update
+ * (m = 2) is MVT_IMM_PIXEL_UPDATE below. */
 static int innovation(const mvt_cv_state_t *mj, const mvt_cv_state_t *s, int m, const mvt_real *H, const mvt_real *y,
                       const mvt_real *noise, int nx, imm_upd_t *u)
 {
@@ -256,45 +258,31 @@ static int innovation(const mvt_cv_state_t *mj, const mvt_cv_state_t *s, int m, 
             u->S[b * m + a] = v;
         }
     }
-    mvt_real det, d2;
-    if (m == 2) {
-        const mvt_real p2[3] = {u->S[0], u->S[1], u->S[3]};
-        mvt_real i2[3];
-        if (mvt_la_inv2_sym(p2, i2) != MVT_OK) {
-            return 0;
-        }
-        det = p2[0] * p2[2] - p2[1] * p2[1];
-        u->Si[0] = i2[0];
-        u->Si[1] = i2[1];
-        u->Si[2] = i2[1];
-        u->Si[3] = i2[2];
-    } else {
-        mvt_real l[9];
-        memcpy(l, u->S, sizeof(mvt_real) * (size_t)(m * m));
-        if (mvt_la_cholesky(m, l) != MVT_OK) {
-            return 0;
-        }
-        det = MVT_R(1.0);
-        for (int a = 0; a < m; a++) {
-            det *= l[a * m + a] * l[a * m + a];
-        }
-        for (int a = 0; a < m; a++) { /* columns of S^-1 */
-            mvt_real e[3] = {MVT_R(0.0), MVT_R(0.0), MVT_R(0.0)};
-            e[a] = MVT_R(1.0);
-            mvt_la_chol_solve(m, l, e);
-            for (int b = 0; b < m; b++) {
-                u->Si[b * m + a] = e[b];
-            }
+    mvt_real l[9];
+    memcpy(l, u->S, sizeof(l));
+    if (mvt_la_cholesky(3, l) != MVT_OK) {
+        return 0;
+    }
+    mvt_real det = MVT_R(1.0);
+    for (int a = 0; a < 3; a++) {
+        det *= l[a * 3 + a] * l[a * 3 + a];
+    }
+    for (int a = 0; a < 3; a++) { /* columns of S^-1 */
+        mvt_real e[3] = {MVT_R(0.0), MVT_R(0.0), MVT_R(0.0)};
+        e[a] = MVT_R(1.0);
+        mvt_la_chol_solve(3, l, e);
+        for (int b = 0; b < 3; b++) {
+            u->Si[b * 3 + a] = e[b];
         }
     }
+    mvt_real d2;
     d2 = MVT_R(0.0);
     for (int a = 0; a < m; a++) {
         for (int b = 0; b < m; b++) {
             d2 += u->y[a] * u->Si[a * m + b] * u->y[b];
         }
     }
-    /* (2 pi)^(m/2) sqrt(det S) */
-    const mvt_real norm = (m == 2 ? MVT_R(6.283185307179586) : MVT_R(15.749609945722419)) * MVT_SQRT(det);
+    const mvt_real norm = MVT_R(15.749609945722419) * MVT_SQRT(det); /* (2 pi)^(3/2) sqrt(det S) */
     u->g = MVT_EXP(MVT_R(-0.5) * d2) / norm;
     return isfinite(d2) && isfinite(u->g) && d2 >= MVT_R(0.0);
 }
@@ -409,7 +397,7 @@ MVT_IMM_PIXEL_UPDATE(px3, 3)
 mvt_err_t mvt_imm_update(mvt_imm_t *imm, const mvt_imm_config_t *c, int m, const mvt_real *H, const mvt_real *y,
                          const mvt_real *noise, mvt_cv_state_t *s)
 {
-    MVT_ASSERT(m >= 1 && m <= 3);
+    MVT_ASSERT(m == 2 || m == 3);
     const int n = c->n;
     imm_upd_t u[MVT_IMM_MODELS];
     /* first every model's innovation, so that a failure changes nothing */

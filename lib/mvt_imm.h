@@ -117,9 +117,10 @@ void mvt_imm_init(mvt_imm_t *imm, const mvt_imm_config_t *c, const mvt_cv_state_
 mvt_err_t mvt_imm_predict_to(mvt_imm_t *imm, const mvt_imm_config_t *c, int64_t utime_us, mvt_cv_state_t *s);
 
 /* One position measurement linearised at the combined estimate s: H (m x 3 rows on the position,
- * row-major), y = z - h(s) (m), noise = R plus any widening (m x m, row-major), m in 1..3.
- * Every model is updated with y_j = y - H (x_j - x), S_j = H P_j H^T + noise (m = 2: robustly,
- * with p_outlier); mu by the likelihoods; s recombined. MVT_ERR_NUMERIC (nothing changed) when some S_j is not positive definite. */
+ * row-major), y = z - h(s), noise = R plus any widening (m x m, row-major); m is 2 (a camera's
+ * pixels) or 3 (a point). Every model is updated with y_j = y - H (x_j - x),
+ * S_j = H P_j H^T + noise (m = 2: robustly, with p_outlier); mu by the likelihoods; s
+ * recombined. MVT_ERR_NUMERIC (nothing changed) when some S_j is not positive definite. */
 mvt_err_t mvt_imm_update(mvt_imm_t *imm, const mvt_imm_config_t *c, int m, const mvt_real *H, const mvt_real *y,
                          const mvt_real *noise, mvt_cv_state_t *s);
 
