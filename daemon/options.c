@@ -50,6 +50,11 @@ static void usage(FILE *f)
             "                      pf: column (default): a particle is a head-top hypothesis, each\n"
             "                      camera scores the body under it and the background above it;\n"
             "                      point: the paper's, a particle is a point of the body\n"
+            "  --pixels shared|independent\n"
+            "                      pf: shared (default): each camera's pixels are shared out between\n"
+            "                      the people, strongest first; pixels one person explains are no\n"
+            "                      evidence for another, and a person behind another is hidden there,\n"
+            "                      not missing; independent: every filter reads every pixel\n"
             "  --seed N            pf: random number seed (default 1); same seed, same output\n"
             "  --publish-particles N\n"
             "                      pf: publish N particles per person on MVTRACK_PARTICLES\n"
@@ -208,7 +213,7 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
 {
     const char *rig_path = NULL, *in_url = MVTD_DEFAULT_URL, *out_url = NULL, *mode = "pkf", *gate = "chi2",
                *merge = "neither", *occlusion = "box", *particle_model = "column",
-               *state_path = NULL, *motion = NULL, *models = NULL;
+               *state_path = NULL, *motion = NULL, *models = NULL, *pixels = "shared";
     int q_given = 0;
     double sigma_px = 2.0, deadline_ms = 20.0, gate_chi2 = 13.8;
     mvt_real q[3] = {MVT_R(0.5), MVT_R(0.5), MVT_R(0.05)};
@@ -224,12 +229,13 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
         {"seed", required_argument, 0, 'S'},     {"publish-particles", required_argument, 0, 'Q'},
         {"particle-model", required_argument, 0, 'B'}, {"state", required_argument, 0, 'T'},
         {"motion", required_argument, 0, 'N'},   {"motion-models", required_argument, 0, 'W'},
+        {"pixels", required_argument, 0, 'x'},
         {0, 0, 0, 0}};
     int opt;
     optind = 1; /* callable more than once (tests, fuzzer) */
     long particles = MVT_MAX_PARTICLES, seed = 1, publish_particles = 0;
     double exclusion_m = -1.0; /* mode-dependent default */
-    while ((opt = getopt_long(argc, argv, "r:i:o:m:g:c:q:s:d:M:O:vhP:X:S:Q:B:T:N:W:", opts, NULL)) != -1) {
+    while ((opt = getopt_long(argc, argv, "r:i:o:m:g:c:q:s:d:M:O:vhP:X:S:Q:B:T:N:W:x:", opts, NULL)) != -1) {
         switch (opt) {
         case 'r': rig_path = optarg; break;
         case 'i': in_url = optarg; break;
@@ -242,6 +248,7 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
         case 'T': state_path = optarg; break;
         case 'N': motion = optarg; break;
         case 'W': models = optarg; break;
+        case 'x': pixels = optarg; break;
         case 'c':
             if (option_pos("--gate-chi2", optarg, &gate_chi2) != 0) {
                 return 2;
@@ -317,7 +324,9 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
     const int oi = option_choice("--occlusion", occlusion, occlusions, 2);
     static const char *const motions[] = {"imm", "cv"};
     const int vi = motion == NULL ? (q_given ? 1 : 0) : option_choice("--motion", motion, motions, 2);
-    if (mi < 0 || gi < 0 || ri < 0 || bi < 0 || oi < 0 || vi < 0) {
+    static const char *const pixel_uses[] = {"shared", "independent"};
+    const int xi = option_choice("--pixels", pixels, pixel_uses, 2);
+    if (mi < 0 || gi < 0 || ri < 0 || bi < 0 || oi < 0 || vi < 0 || xi < 0) {
         return 2;
     }
     if (vi == 0 && q_given) {
@@ -381,6 +390,7 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
         pcfg.num_particles = (int)particles;
         pcfg.use_colour = mi == 5;
         pcfg.column = bi == 0;
+        pcfg.share_pixels = xi == 0;
         pcfg.exclusion_m = (mvt_real)exclusion_m;
         pcfg.seed = (uint64_t)seed;
         if (mvt_pft_init(&pft, &pcfg, cams, d->rig.num_cameras) != MVT_OK) {

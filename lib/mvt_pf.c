@@ -209,6 +209,7 @@ void mvt_pf_predict(mvt_pf_pool_t *p, mvt_real dt_s, const mvt_pf_noise_t *noise
     const mvt_real dt = dt_s > MVT_R(0.0) ? dt_s : MVT_R(0.0);
     const mvt_real sp = MVT_SQRT(noise->pos_m2s * dt), sv = MVT_SQRT(noise->vel_m2s3 * dt);
     const mvt_real sc = MVT_SQRT(noise->colour_1s * dt);
+    const mvt_real spz = MVT_SQRT(noise->pos_z_m2s * dt), svz = MVT_SQRT(noise->vel_z_m2s3 * dt);
     for (int i = 0; i < p->n; i++) {
         mvt_real g[8];
         mvt_rng_normal2(rng, g);
@@ -216,10 +217,10 @@ void mvt_pf_predict(mvt_pf_pool_t *p, mvt_real dt_s, const mvt_pf_noise_t *noise
         mvt_rng_normal2(rng, g + 4);
         p->x[i] += p->vx[i] * dt + sp * g[0];
         p->y[i] += p->vy[i] * dt + sp * g[1];
-        p->z[i] += p->vz[i] * dt + sp * g[2];
+        p->z[i] += p->vz[i] * dt + spz * g[2];
         p->vx[i] += sv * g[3];
         p->vy[i] += sv * g[4];
-        p->vz[i] += sv * g[5];
+        p->vz[i] += svz * g[5];
         if (sc > MVT_R(0.0)) {
             mvt_rng_normal2(rng, g + 6);
             mvt_real hue = p->h[i] + sc * g[6];
@@ -269,9 +270,27 @@ static inline mvt_real colour_log(const mvt_pf_tables_t *tab, const mvt_mask_t *
     return tab->log_h[dh] + tab->log_s[ds];
 }
 
+/* D at mask pixel idx as this target may read it: the floor outside the image, 1/2 where another
+ * target's claim covers the pixel (evidence neither way). *behind: 0 unclaimed, 1 claimed by a
+ * target farther than the point's camera depth z, 2 by a nearer one. O(1). */
+static inline uint8_t claimed_level(const uint8_t *d, const mvt_pf_claims_t *cl, const mvt_pf_tables_t *tab, int idx,
+                                    mvt_real z, int *behind)
+{
+    *behind = 0;
+    if (idx < 0) {
+        return tab->d_floor;
+    }
+    if (cl == NULL || cl->depth[idx] == 0u) {
+        return d[idx];
+    }
+    *behind = cl->depth[idx] < mvt_pf_claim_depth(z) ? 2 : 1;
+    return 128u;
+}
+
 void mvt_pf_weight(mvt_pf_pool_t *p, const mvt_camera_t *cams, const mvt_pf_fov_t *fovs,
                    const mvt_pf_image_t *images, int num_cams, const mvt_pf_tables_t *tab, int use_colour,
-                   const mvt_pf_body_t *body, mvt_real exponent, mvt_real on_fg[])
+                   const mvt_pf_body_t *body, mvt_real exponent, const mvt_pf_claims_t *claims,
+                   mvt_real on_fg[], mvt_real hidden[])
 {
     MVT_ASSERT(p != NULL && cams != NULL && fovs != NULL && images != NULL && tab != NULL);
     const uint8_t fg_level = (uint8_t)(((int)tab->d_floor + 255) / 2);
@@ -280,6 +299,9 @@ void mvt_pf_weight(mvt_pf_pool_t *p, const mvt_camera_t *cams, const mvt_pf_fov_
         if (on_fg != NULL) {
             on_fg[k] = MVT_R(0.0);
         }
+        if (hidden != NULL) {
+            hidden[k] = MVT_R(0.0);
+        }
         if (img->width < 1) {
             continue;
         }
@@ -287,9 +309,11 @@ void mvt_pf_weight(mvt_pf_pool_t *p, const mvt_camera_t *cams, const mvt_pf_fov_
         const mvt_pf_fov_t *f = &fovs[k];
         const int colour = use_colour && img->mask->has_colour;
         const uint8_t *d = img->d;
+        const mvt_pf_claims_t *cl =
+            claims != NULL && claims[k].width == img->width && claims[k].height == img->height ? &claims[k] : NULL;
         /* R's third column: the camera-frame direction of world up */
         const mvt_real ux = c->R[2], uy = c->R[5], uz = c->R[8];
-        int n_fg = 0;
+        int n_fg = 0, n_hidden = 0;
         for (int i = 0; i < p->n; i++) {
             const mvt_real xw[3] = {p->x[i], p->y[i], p->z[i]};
             mvt_real xc[3];
@@ -297,33 +321,52 @@ void mvt_pf_weight(mvt_pf_pool_t *p, const mvt_camera_t *cams, const mvt_pf_fov_
             mvt_real lw;
             if (body == NULL) {
                 const int idx = view_index(c, f, img, xc[0], xc[1], xc[2]);
-                const uint8_t l = idx >= 0 ? d[idx] : tab->d_floor;
+                int behind;
+                const uint8_t l = claimed_level(d, cl, tab, idx, xc[2], &behind);
                 lw = tab->log_d[l];
-                n_fg += l > fg_level;
+                n_fg += !behind && idx >= 0 && d[idx] > fg_level;
+                n_hidden += behind != 0;
                 if (colour) {
-                    lw += colour_log(tab, img->mask, idx, p->h[i], p->s[i]);
+                    lw += behind == 2 ? tab->log_colour_background : colour_log(tab, img->mask, idx, p->h[i], p->s[i]);
                 }
             } else {
                 /* the column: points at heights z + dz are xc + dz * up */
                 const mvt_real dz_above = body->above_m, dz_head = -body->head_m;
                 const mvt_real dz_torso = (body->torso_frac - MVT_R(1.0)) * p->z[i];
                 const mvt_real dz_legs = (body->legs_frac - MVT_R(1.0)) * p->z[i];
-                const int ia = view_index(c, f, img, xc[0] + dz_above * ux, xc[1] + dz_above * uy, xc[2] + dz_above * uz);
-                const int ih = view_index(c, f, img, xc[0] + dz_head * ux, xc[1] + dz_head * uy, xc[2] + dz_head * uz);
-                const int it = view_index(c, f, img, xc[0] + dz_torso * ux, xc[1] + dz_torso * uy, xc[2] + dz_torso * uz);
-                const int il = view_index(c, f, img, xc[0] + dz_legs * ux, xc[1] + dz_legs * uy, xc[2] + dz_legs * uz);
-                const uint8_t lh = ih >= 0 ? d[ih] : tab->d_floor;
-                lw = tab->log_bg[ia >= 0 ? d[ia] : tab->d_floor] + tab->log_d[lh] +
-                     tab->log_d[it >= 0 ? d[it] : tab->d_floor] + tab->log_d[il >= 0 ? d[il] : tab->d_floor];
-                n_fg += lh > fg_level;
+                const mvt_real za = xc[2] + dz_above * uz, zh = xc[2] + dz_head * uz;
+                const mvt_real zt = xc[2] + dz_torso * uz, zl = xc[2] + dz_legs * uz;
+                const int ia = view_index(c, f, img, xc[0] + dz_above * ux, xc[1] + dz_above * uy, za);
+                const int ih = view_index(c, f, img, xc[0] + dz_head * ux, xc[1] + dz_head * uy, zh);
+                const int it = view_index(c, f, img, xc[0] + dz_torso * ux, xc[1] + dz_torso * uy, zt);
+                const int il = view_index(c, f, img, xc[0] + dz_legs * ux, xc[1] + dz_legs * uy, zl);
+                int ba, bh, bt, bl;
+                const uint8_t la = claimed_level(d, cl, tab, ia, za, &ba);
+                const uint8_t lh = claimed_level(d, cl, tab, ih, zh, &bh);
+                const uint8_t lt = claimed_level(d, cl, tab, it, zt, &bt);
+                const uint8_t ll = claimed_level(d, cl, tab, il, zl, &bl);
+                (void)ba;
+                (void)bl;
+                lw = tab->log_bg[la] + tab->log_d[lh] + tab->log_d[lt] + tab->log_d[ll];
+                if (body->face_m > MVT_R(0.0)) {
+                    const mvt_real dz_face = -body->face_m, zf = xc[2] + dz_face * uz;
+                    const int iff = view_index(c, f, img, xc[0] + dz_face * ux, xc[1] + dz_face * uy, zf);
+                    int bf;
+                    lw += tab->log_d[claimed_level(d, cl, tab, iff, zf, &bf)];
+                }
+                n_fg += !bh && ih >= 0 && d[ih] > fg_level;
+                n_hidden += bh != 0;
                 if (colour) {
-                    lw += colour_log(tab, img->mask, it, p->h[i], p->s[i]);
+                    lw += bt == 2 ? tab->log_colour_background : colour_log(tab, img->mask, it, p->h[i], p->s[i]);
                 }
             }
             p->w[i] += exponent * lw;
         }
         if (on_fg != NULL) {
             on_fg[k] = (mvt_real)n_fg / (mvt_real)p->n;
+        }
+        if (hidden != NULL) {
+            hidden[k] = (mvt_real)n_hidden / (mvt_real)p->n;
         }
     }
 }

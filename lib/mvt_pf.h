@@ -124,9 +124,11 @@ typedef struct mvt_pf_noise {
     mvt_real z_renew;    /* probability per prediction that a particle's height is drawn anew,
                             uniform in [z_min, z_max], with zero vertical velocity, [0, 1] */
     mvt_real z_min, z_max; /* m */
+    mvt_real pos_z_m2s;  /* vertical position diffusion, m^2/s, >= 0 */
+    mvt_real vel_z_m2s3; /* vertical velocity diffusion, m^2/s^3, >= 0 */
 } mvt_pf_noise_t;
 
-/* x += v dt + noise, v += noise, colour += noise (hue wrapped, saturation clamped to [0, 1]); then
+/* x += v dt + noise, v += noise (horizontal and vertical diffusions apart), colour += noise (hue wrapped, saturation clamped to [0, 1]); then
  * with probability z_renew the height is drawn anew. A particle is a point of the person's body,
  * not one material point: which body point it is has no memory, and a random walk alone would
  * take thousands of frames to spread the cloud over a body's height. dt_s >= 0. O(n). */
@@ -142,21 +144,52 @@ typedef struct mvt_pf_body {
     mvt_real legs_frac;  /* legs point at this fraction of z, (0, 1); default 0.3 */
     mvt_real min_top_m;  /* lowest head top (mvt_pft reflects hypotheses below it: a shadow on the
                             floor is a perfect column of height ~0), >= 0; default 0.9 */
+    mvt_real face_m;     /* a second point this far under the top should be foreground too (the
+                            face), >= 0, 0: none; default 0.16. With one head point, a hypothesis
+                            far above the head costs only that point: the likelihood along z had a
+                            plateau above the head 1.6 nats under its peak (5 cameras), and tall
+                            people's heights ran off to it; with the face point it is 5-6 nats */
 } mvt_pf_body_t;
+
+/* Pixels that other targets already explain (mvt_pft shares each camera's pixels out between its
+ * targets). Per mask pixel: 0 when no other target's silhouette covers it, else the quantised
+ * camera depth of the nearest one that does (mvt_pf_claim_depth). */
+typedef struct mvt_pf_claims {
+    int width, height;                  /* as the camera's image this frame; 0 x 0: no claims */
+    uint8_t depth[MVT_MAX_MASK_PIXELS]; /* row-major */
+} mvt_pf_claims_t;
+
+/* Depth step of the claims, m: depths 0..12.7 m are told apart, farther ones are all "far". */
+#define MVT_PF_CLAIM_STEP_M MVT_R(0.05)
+
+/* 1 + floor(z / MVT_PF_CLAIM_STEP_M), in 1..255. O(1). */
+static inline uint8_t mvt_pf_claim_depth(mvt_real z)
+{
+    const mvt_real q = z / MVT_PF_CLAIM_STEP_M;
+    return (uint8_t)(q >= MVT_R(254.0) ? 255 : (q > MVT_R(0.0) ? 1 + (int)q : 1));
+}
 
 /* Adds to pool->w exponent times each camera's log-likelihood (images with width 0 are skipped).
  * body NULL (point model): log D at the particle's pixel. body set (column model): log D at the
- * head, torso and legs points plus log max(1 - D, p_B) at the point above the top.
- * With colour (use_colour and the camera's mask has colour), the scored point (point model: the
+ * head, face (when face_m > 0), torso and legs points plus log max(1 - D, p_B) at the point above
+ * the top. With colour (use_colour and the camera's mask has colour), the scored point (point model: the
  * particle; column model: the torso point) adds on foreground the log of Eq. 11 x Eq. 13 at its
  * pixel, on background log(h_B s_B). A point outside the image or behind the camera reads D = p_B
  * (and log(h_B s_B)), the same as background.
+ * claims (may be NULL; else one per camera, width 0 for none): a point on a pixel another target
+ * explains reads D = 1/2 whatever the mask says. Another silhouette makes that pixel foreground
+ * whether or not this target is there too, so it is evidence neither way (the likelihood ratio of
+ * a union of silhouettes). Its colour is scored only when this target's point is the nearer
+ * (otherwise log(h_B s_B)): the nearer body is the one whose colour the camera sees.
  * on_fg[k] (may be NULL) receives, per camera, the fraction of particles (unweighted) whose
- * particle (column model: head point) has D above the midpoint between p_B and 1.
- * O(n * num_cams) projections (column model: 4 per particle and camera). */
+ * particle (column model: head point) has D above the midpoint between p_B and 1 on a pixel no
+ * other target claims; hidden[k] (may be NULL) the fraction whose point is on a claimed pixel (the
+ * view cannot tell whether this target is there: another explains what it sees).
+ * O(n * num_cams) projections (column model: 4 or 5 per particle and camera). */
 void mvt_pf_weight(mvt_pf_pool_t *pool, const mvt_camera_t *cams, const mvt_pf_fov_t *fovs,
                    const mvt_pf_image_t *images, int num_cams, const mvt_pf_tables_t *tab, int use_colour,
-                   const mvt_pf_body_t *body, mvt_real exponent, mvt_real on_fg[]);
+                   const mvt_pf_body_t *body, mvt_real exponent, const mvt_pf_claims_t *claims,
+                   mvt_real on_fg[], mvt_real hidden[]);
 
 /* Turns log weights into normalised weights (max-subtracted, so no underflow to all zeros) and
  * returns the effective sample size 1 / sum(w^2), in [1, n]. A pool whose log weights are not all

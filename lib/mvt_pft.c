@@ -20,6 +20,8 @@ void mvt_pft_config_default(mvt_pft_config_t *c)
     c->noise.vel_m2s3 = MVT_R(1.0);
     c->noise.colour_1s = MVT_R(0.005);
     c->noise.z_renew = MVT_R(0.2);
+    c->noise.pos_z_m2s = MVT_R(0.002);
+    c->noise.vel_z_m2s3 = MVT_R(0.01);
     c->noise.z_min = MVT_R(0.0);
     c->noise.z_max = MVT_R(2.2);
     c->column = 1;
@@ -28,6 +30,7 @@ void mvt_pft_config_default(mvt_pft_config_t *c)
     c->body.torso_frac = MVT_R(0.7);
     c->body.legs_frac = MVT_R(0.3);
     c->body.min_top_m = MVT_R(0.9);
+    c->body.face_m = MVT_R(0.16);
     c->num_particles = MVT_MAX_PARTICLES;
     c->use_colour = 1;
     c->lik_exponent = MVT_R(0.5);
@@ -42,10 +45,12 @@ void mvt_pft_config_default(mvt_pft_config_t *c)
     c->dup_dist_m = MVT_R(0.2);
     c->support_fraction = MVT_R(0.25);
     c->support_min_views = 2;
-    c->lost_s = MVT_R(1.0);
+    c->lost_s = MVT_R(0.5);
     c->confirm_frames = 5;
     c->tentative_lost_s = MVT_R(0.2);
     c->recover_s = MVT_R(3.0);
+    c->share_pixels = 1;
+    c->body_radius_m = MVT_R(0.25);
     c->seed = 1u;
 }
 
@@ -62,7 +67,8 @@ mvt_err_t mvt_pft_init(mvt_pft_t *self, const mvt_pft_config_t *cfg, const mvt_c
         !(q->vel_m2s3 >= MVT_R(0.0)) || !(q->colour_1s >= MVT_R(0.0)) ||
         !in_range(q->z_renew, MVT_R(0.0), MVT_R(1.0)) || !(q->z_max >= q->z_min) || !isfinite(q->z_min) ||
         !isfinite(q->z_max) || !isfinite(q->pos_m2s) ||
-        !isfinite(q->vel_m2s3) || !isfinite(q->colour_1s) || !(cfg->ess_fraction > MVT_R(0.0)) ||
+        !isfinite(q->vel_m2s3) || !isfinite(q->colour_1s) || !(q->pos_z_m2s >= MVT_R(0.0)) ||
+        !(q->vel_z_m2s3 >= MVT_R(0.0)) || !isfinite(q->pos_z_m2s) || !isfinite(q->vel_z_m2s3) || !(cfg->ess_fraction > MVT_R(0.0)) ||
         !in_range(cfg->ess_fraction, MVT_R(0.0), MVT_R(1.0)) || !(cfg->p_h > MVT_R(0.0)) ||
         !in_range(cfg->p_h, MVT_R(0.0), MVT_R(1.0)) || !(cfg->head_quantile > MVT_R(0.0)) ||
         !in_range(cfg->head_quantile, MVT_R(0.0), MVT_R(1.0)) || !in_range(cfg->exclusion_m, MVT_R(0.0), MVT_R(10.0)) ||
@@ -75,11 +81,13 @@ mvt_err_t mvt_pft_init(mvt_pft_t *self, const mvt_pft_config_t *cfg, const mvt_c
         return MVT_ERR_INVALID;
     }
     const mvt_pf_body_t *b = &cfg->body;
-    if ((cfg->column != 0 && cfg->column != 1) || cfg->confirm_frames < 1 || !(cfg->tentative_lost_s > MVT_R(0.0)) ||
+    if ((cfg->column != 0 && cfg->column != 1) || (cfg->share_pixels != 0 && cfg->share_pixels != 1) ||
+        !in_range(cfg->body_radius_m, MVT_R(0.01), MVT_R(2.0)) || cfg->confirm_frames < 1 || !(cfg->tentative_lost_s > MVT_R(0.0)) ||
         !isfinite(cfg->tentative_lost_s) || !in_range(b->min_top_m, MVT_R(0.0), MVT_R(10.0))) {
         return MVT_ERR_INVALID;
     }
     if (cfg->column && (!in_range(b->above_m, MVT_R(1e-3), MVT_R(1.0)) || !in_range(b->head_m, MVT_R(1e-3), MVT_R(1.0)) ||
+                        !in_range(b->face_m, MVT_R(0.0), MVT_R(1.0)) ||
                         !in_range(b->torso_frac, MVT_R(0.01), MVT_R(0.99)) || !in_range(b->legs_frac, MVT_R(0.01), MVT_R(0.99)))) {
         return MVT_ERR_INVALID;
     }
@@ -206,9 +214,105 @@ static mvt_real column_top(const mvt_pft_t *self, const mvt_real xy[2], mvt_real
     return fallback;
 }
 
-static void exclusion_prior(mvt_pft_t *self, int ti)
+/* a before b: stronger, then confirmed or coasting before tentative, then the older identity
+ * (lower id: identities count up) */
+static int stronger(const mvt_pft_target_t *a, const mvt_pft_target_t *b)
+{
+    const int ta = a->status == MVT_TRACK_TENTATIVE, tb = b->status == MVT_TRACK_TENTATIVE;
+    if (a->strength > b->strength || a->strength < b->strength) {
+        return a->strength > b->strength;
+    }
+    return ta != tb ? ta < tb : a->id < b->id;
+}
+
+/* The order the targets are weighted in when pixels are shared out, strongest first. A target
+ * that lost its person, or a ghost, has had little support for a while and comes after the
+ * person's own target, so it cannot take that person's pixels. Insertion sort, O(T^2); sort 0:
+ * slot order. Returns the number of live targets. */
+static int rank_targets(mvt_pft_t *self, int sort)
+{
+    int n = 0;
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        if (self->targets[t].id != 0) {
+            self->rank[n++] = (int16_t)t;
+        }
+    }
+    for (int i = 1; i < n && sort; i++) {
+        const int16_t cur = self->rank[i];
+        const mvt_pft_target_t *a = &self->targets[cur];
+        int j = i - 1;
+        for (; j >= 0 && !stronger(&self->targets[self->rank[j]], a); j--) { /* the weaker ones move right */
+            self->rank[j + 1] = self->rank[j];
+        }
+        self->rank[j + 1] = cur;
+    }
+    return n;
+}
+
+/* Claims target a's silhouette in every camera with an image: the mask box of a vertical cylinder
+ * of body_radius_m from the floor to just above its head top (the box of 8 points on its rims
+ * that project), at the camera depth of its middle; the nearer claim keeps a pixel. A camera
+ * where the head top does not project claims nothing. O(C + box pixels). */
+static void claim_silhouette(mvt_pft_t *self, const mvt_pft_target_t *a)
 {
     const mvt_pft_config_t *c = &self->cfg;
+    const mvt_real r = c->body_radius_m;
+    const mvt_real x = a->est.mean[0], y = a->est.mean[1];
+    const mvt_real top = a->est.head_z + (c->column ? c->body.above_m : MVT_R(0.0));
+    for (int k = 0; k < self->det.num_cameras; k++) {
+        mvt_pf_claims_t *cl = &self->claims[k];
+        const mvt_pf_image_t *img = &self->images[k];
+        const mvt_camera_t *cam = &self->det.cams[k];
+        if (cl->width < 1) {
+            continue;
+        }
+        const mvt_real head[3] = {x, y, top};
+        mvt_real uv[2];
+        if (mvt_cam_project(cam, head, uv, NULL) != MVT_OK) {
+            continue;
+        }
+        mvt_real u0 = uv[0], u1 = uv[0], v0 = uv[1], v1 = uv[1];
+        static const int8_t dir[4][2] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
+        for (int j = 0; j < 8; j++) {
+            const mvt_real p[3] = {x + r * (mvt_real)dir[j & 3][0], y + r * (mvt_real)dir[j & 3][1],
+                                   j < 4 ? top : MVT_R(0.0)};
+            if (mvt_cam_project(cam, p, uv, NULL) == MVT_OK) {
+                u0 = uv[0] < u0 ? uv[0] : u0;
+                u1 = uv[0] > u1 ? uv[0] : u1;
+                v0 = uv[1] < v0 ? uv[1] : v0;
+                v1 = uv[1] > v1 ? uv[1] : v1;
+            }
+        }
+        const mvt_real mid[3] = {x, y, MVT_R(0.5) * top};
+        mvt_real xc[3];
+        mvt_cam_to_camera(cam, mid, xc);
+        const uint8_t dq = mvt_pf_claim_depth(xc[2]);
+        const mvt_real s = (mvt_real)img->scale;
+        const mvt_real fu0 = (u0 + MVT_R(0.5)) / s, fu1 = (u1 + MVT_R(0.5)) / s;
+        const mvt_real fv0 = (v0 + MVT_R(0.5)) / s, fv1 = (v1 + MVT_R(0.5)) / s;
+        if (!(fu1 >= MVT_R(0.0) && fv1 >= MVT_R(0.0) && fu0 < (mvt_real)cl->width && fv0 < (mvt_real)cl->height)) {
+            continue; /* off the picture (also catches non-finite boxes) */
+        }
+        const int c0 = fu0 > MVT_R(0.0) ? (int)fu0 : 0, r0 = fv0 > MVT_R(0.0) ? (int)fv0 : 0;
+        const int c1 = fu1 < (mvt_real)(cl->width - 1) ? (int)fu1 : cl->width - 1;
+        const int r1 = fv1 < (mvt_real)(cl->height - 1) ? (int)fv1 : cl->height - 1;
+        for (int row = r0; row <= r1; row++) {
+            uint8_t *line = &cl->depth[row * cl->width];
+            for (int col = c0; col <= c1; col++) {
+                line[col] = line[col] == 0u || line[col] > dq ? dq : line[col];
+            }
+        }
+    }
+}
+
+/* Starts the log weights of the target ranked r-th: particles horizontally within exclusion_m of
+ * another person lose up to exclusion_log. Independent targets: every other target, at its
+ * predicted centre. Shared pixels: only the targets weighted before it (the stronger ones), at
+ * their new estimates; a weaker target does not push a stronger one off its person. */
+static void exclusion_prior(mvt_pft_t *self, int r, int shared)
+{
+    const mvt_pft_config_t *c = &self->cfg;
+    const int ti = self->rank[r];
     mvt_pf_pool_t *p = &self->targets[ti].pool;
     for (int i = 0; i < p->n; i++) {
         p->w[i] = MVT_R(0.0);
@@ -217,11 +321,12 @@ static void exclusion_prior(mvt_pft_t *self, int ti)
         return;
     }
     const mvt_real r2 = c->exclusion_m * c->exclusion_m;
-    for (int o = 0; o < MVT_MAX_TARGETS; o++) {
+    for (int j = 0; j < (shared ? r : MVT_MAX_TARGETS); j++) {
+        const int o = shared ? self->rank[j] : j;
         if (o == ti || self->targets[o].id == 0) {
             continue;
         }
-        const mvt_real *m = self->centre[o];
+        const mvt_real *m = shared ? self->targets[o].est.mean : self->centre[o];
         for (int i = 0; i < p->n; i++) {
             const mvt_real dx = p->x[i] - m[0], dy = p->y[i] - m[1];
             const mvt_real d2 = dx * dx + dy * dy;
@@ -324,8 +429,8 @@ static void delete_targets(mvt_pft_t *self, int64_t now_us)
             }
             const mvt_real dx = a->est.mean[0] - b->est.mean[0], dy = a->est.mean[1] - b->est.mean[1];
             if (dx * dx + dy * dy < d2max) {
-                mvt_pft_target_t *younger = a->id > b->id ? a : b;
-                younger->id = 0;
+                mvt_pft_target_t *weaker = stronger(a, b) ? b : a;
+                weaker->id = 0;
                 self->counters.deleted_duplicate++;
             }
         }
@@ -392,15 +497,27 @@ mvt_err_t mvt_pft_step(mvt_pft_t *self, const mvt_frame_t *frame, mvt_output_t *
             self->centre[t][i] = a->est.mean[i] + a->est.vel[i] * dt;
         }
     }
-    const int need = c->support_min_views < masks ? c->support_min_views : masks;
+    /* pixels shared out: the targets are weighted strongest first, each reading what the ones
+     * before it left unexplained */
+    const int shared = c->share_pixels && masks > 0;
+    for (int k = 0; k < num_cams; k++) {
+        mvt_pf_claims_t *cl = &self->claims[k];
+        cl->width = shared ? self->images[k].width : 0;
+        cl->height = shared ? self->images[k].height : 0;
+        if (cl->width > 0) {
+            memset(cl->depth, 0, (size_t)cl->width * (size_t)cl->height);
+        }
+    }
+    const int live = rank_targets(self, shared);
     /* head-top hypotheses keep their height: no renewal over the body */
     mvt_pf_noise_t noise = c->noise;
     noise.z_renew = c->column ? MVT_R(0.0) : noise.z_renew;
-    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
-        mvt_pft_target_t *a = &self->targets[t];
-        if (a->id == 0) {
-            continue;
-        }
+    if (!c->column) { /* the point model's particles are points of the body: isotropic */
+        noise.pos_z_m2s = noise.pos_m2s;
+        noise.vel_z_m2s3 = noise.vel_m2s3;
+    }
+    for (int r = 0; r < live; r++) {
+        mvt_pft_target_t *a = &self->targets[self->rank[r]];
         mvt_pf_predict(&a->pool, dt, &noise, &self->rng);
         if (c->column) { /* head tops below the lowest one are reflected above it */
             const mvt_real lo = c->body.min_top_m;
@@ -411,10 +528,10 @@ mvt_err_t mvt_pft_step(mvt_pft_t *self, const mvt_frame_t *frame, mvt_output_t *
                 }
             }
         }
-        exclusion_prior(self, t);
-        mvt_real on_fg[MVT_MAX_CAMERAS];
+        exclusion_prior(self, r, shared);
+        mvt_real on_fg[MVT_MAX_CAMERAS], hidden[MVT_MAX_CAMERAS];
         mvt_pf_weight(&a->pool, self->det.cams, self->fovs, self->images, num_cams, &self->tab, c->use_colour,
-                      c->column ? &c->body : NULL, c->lik_exponent, on_fg);
+                      c->column ? &c->body : NULL, c->lik_exponent, shared ? self->claims : NULL, on_fg, hidden);
         a->ess = mvt_pf_normalise(&a->pool);
         if (!(a->ess > MVT_R(0.0))) {
             self->counters.numeric_faults++;
@@ -423,11 +540,23 @@ mvt_err_t mvt_pft_step(mvt_pft_t *self, const mvt_frame_t *frame, mvt_output_t *
         if (masks > 0 && !c->column) {
             a->est.head_z = column_top(self, a->est.mean, a->est.head_z, masks);
         }
+        /* a view supports the target when enough of its head hypotheses are on foreground that no
+         * nearer target explains; a view where most are behind a nearer target's pixels is hidden
+         * and does not count against it */
         a->cameras_used = 0u;
+        int visible = 0;
         for (int k = 0; k < num_cams; k++) {
-            a->cameras_used |= on_fg[k] >= c->support_fraction && self->images[k].width > 0 ? 1u << k : 0u;
+            const int has = self->images[k].width > 0;
+            a->cameras_used |= on_fg[k] >= c->support_fraction && has ? 1u << k : 0u;
+            const int is_hidden = has && hidden[k] >= MVT_R(0.5);
+            visible += has && !is_hidden;
+            self->counters.views_hidden += (uint64_t)is_hidden;
         }
+        int need = c->support_min_views < visible ? c->support_min_views : visible;
+        need = need > 0 ? need : 1;
         const int supported = masks > 0 && popcount(a->cameras_used) >= need;
+        const mvt_real share = visible > 0 ? (mvt_real)popcount(a->cameras_used) / (mvt_real)visible : MVT_R(0.0);
+        a->strength += (MVT_R(1.0) - MVT_EXP(-dt)) * ((share < MVT_R(1.0) ? share : MVT_R(1.0)) - a->strength);
         if (supported) {
             a->last_supported_us = frame->utime_us;
             a->supported_frames += a->supported_frames < c->confirm_frames;
@@ -442,6 +571,9 @@ mvt_err_t mvt_pft_step(mvt_pft_t *self, const mvt_frame_t *frame, mvt_output_t *
         if (a->ess < c->ess_fraction * (mvt_real)a->pool.n) {
             mvt_pf_resample(&a->pool, &self->rng, &self->scratch);
             self->counters.resamples++;
+        }
+        if (shared) {
+            claim_silhouette(self, a);
         }
     }
     follow_blob_tracks(self);

@@ -15,7 +15,7 @@
  *   lifecycle a camera supports a target when at least support_fraction of its particles project
  *             onto foreground; a target supported by fewer than support_min_views cameras (capped
  *             by the cameras that sent masks) for lost_s is deleted; so is one that leaves the
- *             volume (plus margin) or comes within dup_dist_m (horizontally) of an older target.
+ *             volume (plus margin) or comes within dup_dist_m (horizontally) of a stronger target.
  *             A new target stays TENTATIVE until supported in confirm_frames frames and is deleted
  *             when unsupported for tentative_lost_s meanwhile (blob-level ghosts die there)
  * Output per target: position = the weighted mean (column model: particles are head tops) or
@@ -40,12 +40,14 @@ typedef struct mvt_pft_config {
                                    h_b 0.5, s_b 0.5 */
     mvt_pf_noise_t noise;       /* pos 0.02 m^2/s, vel 1.0 m^2/s^3, colour 0.005 1/s, z_renew 0.2
                                    over z 0..2.2 m (point model only; the column model never
-                                   renews heights) */
+                                   renews heights), vertical pos 0.002 m^2/s and vel 0.1 m^2/s^3
+                                   (column model: a head top moves up and down a tenth as much as
+                                   sideways; the point model diffuses isotropically) */
     int column;                 /* 1 (default): column model, a particle is a head-top hypothesis
                                    scored along the body under it (mvt_pf_weight); 0: the paper's
                                    point model, a particle is a point of the body */
     mvt_pf_body_t body;         /* column model: above 0.06 m, head 0.06 m, torso 0.7, legs 0.3,
-                                   lowest top 0.9 m */
+                                   lowest top 0.9 m, face 0.16 m */
     int num_particles;          /* per target, 16..MVT_MAX_PARTICLES; default MVT_MAX_PARTICLES */
     int use_colour;             /* 1 (default): MS+C for cameras that send hue/saturation; 0: MS */
     mvt_real lik_exponent;      /* each camera's log-likelihood is multiplied by this, (0, 1]: the
@@ -69,6 +71,18 @@ typedef struct mvt_pft_config {
                                    >= 1; default 5 */
     mvt_real tentative_lost_s;  /* a tentative target unsupported this long is deleted, > 0;
                                    default 0.2 */
+    int share_pixels;           /* 1 (default): each camera's pixels are shared out between the
+                                   targets (mvt_pf_claims_t): the targets are weighted one after
+                                   another, strongest first (strength, then confirmed before
+                                   tentative, then the older), and each one's
+                                   silhouette at its new estimate claims its pixels for the targets
+                                   after it; a camera where most of a target's head hypotheses are
+                                   on claimed pixels cannot tell whether it is there (hidden), and
+                                   hidden views do not count against it; 0: independent targets
+                                   (every target reads every pixel) */
+    mvt_real body_radius_m;     /* share_pixels: a target's silhouette is the image box of a
+                                   vertical cylinder of this radius from the floor to its head
+                                   top, > 0; default 0.25 (shoulders) */
     mvt_real recover_s;         /* identity recovery: a target deleted as lost keeps its identity this
                                    long for a new target born from the blob track it was following
                                    (the blob tracker kept the person; the filter lost them); >= 0,
@@ -87,6 +101,9 @@ typedef struct mvt_pft_target {
     int64_t recover_until_us;   /* tentative with a recovered identity: until when it may give it
                                    back; 0 otherwise */
     mvt_real ess;               /* effective sample size this frame, before resampling */
+    mvt_real strength;          /* share of the cameras that could see it which supported it,
+                                   smoothed over about 1 s (exponential, from 0 at birth): the
+                                   order pixels are shared out in, and who stays of two duplicates */
     mvt_pf_estimate_t est;
     mvt_pf_pool_t pool;
 } mvt_pft_target_t;
@@ -102,6 +119,7 @@ typedef struct mvt_pft_counters {
     uint64_t deleted_outside;
     uint64_t deleted_duplicate;
     uint64_t identities_recovered;   /* targets confirmed with a lost target's identity */
+    uint64_t views_hidden;           /* target-views where the target was behind a nearer one's pixels */
     uint64_t resamples;
     uint64_t numeric_faults;         /* non-finite weights: reset to uniform */
 } mvt_pft_counters_t;
@@ -128,6 +146,8 @@ typedef struct mvt_pft {
     uint16_t order[MVT_MAX_PARTICLES];
     mvt_output_t det_out;
     mvt_real centre[MVT_MAX_TARGETS][3];  /* targets' predicted centres for the exclusion prior */
+    mvt_pf_claims_t claims[MVT_MAX_CAMERAS]; /* share_pixels: what the targets weighted so far explain */
+    int16_t rank[MVT_MAX_TARGETS];        /* share_pixels: the order the targets are weighted in */
 } mvt_pft_t;
 
 /* Documented defaults (det: mvt_tracker_config_default). */

@@ -342,8 +342,8 @@ static void pf_run(const mvt_pf_tables_t *tab, const mvt_pf_fov_t *fovs, uint64_
         p->vx[i] = p->vy[i] = p->vz[i] = 0.0f;
         p->h[i] = p->s[i] = 0.0f;
     }
-    const mvt_pf_noise_t noise = {0.02f, 0.05f, 0.0f, 0.0f, 0.0f, 2.2f};
-    const mvt_pf_body_t body = {0.06f, 0.06f, 0.7f, 0.3f, 0.9f};
+    const mvt_pf_noise_t noise = {0.02f, 0.05f, 0.0f, 0.0f, 0.0f, 2.2f, 0.02f, 0.05f};
+    const mvt_pf_body_t body = {0.06f, 0.06f, 0.7f, 0.3f, 0.9f, 0.16f};
     for (int f = 0; f < 40; f++) {
         mvt_pf_predict(p, 0.04f, &noise, &rng);
         for (int i = 0; i < p->n; i++) {
@@ -352,7 +352,7 @@ static void pf_run(const mvt_pf_tables_t *tab, const mvt_pf_fov_t *fovs, uint64_
         for (int k = 0; k < MCU_NCAM; k++) { /* one image at a time: weights add up */
             pf_mask_of(k);
             mvt_pf_image_build(&g_pf_img, &g_pf_mask, tab, 4.0f, &g_pf_blur);
-            mvt_pf_weight(p, &g_cams[k], &fovs[k], &g_pf_img, 1, tab, 0, &body, 0.5f, NULL);
+            mvt_pf_weight(p, &g_cams[k], &fovs[k], &g_pf_img, 1, tab, 0, &body, 0.5f, NULL, NULL, NULL);
         }
         const mvt_real ess = mvt_pf_normalise(p);
         check(ess >= 1.0f, "pf effective sample size", ess, 1.0f);
