@@ -354,6 +354,17 @@ void mvt_pf_weight(mvt_pf_pool_t *p, const mvt_camera_t *cams, const mvt_pf_fov_
                     int bf;
                     lw += tab->log_d[claimed_level(d, cl, tab, iff, zf, &bf)];
                 }
+                if (body->clear_m > MVT_R(0.0)) {
+                    uint8_t top_level = 0u;
+                    for (int j = 1; j <= 3; j++) {
+                        const mvt_real dz = body->clear_m * (mvt_real)j / MVT_R(3.0), zc = xc[2] + dz * uz;
+                        const int ic = view_index(c, f, img, xc[0] + dz * ux, xc[1] + dz * uy, zc);
+                        int bc;
+                        const uint8_t l = claimed_level(d, cl, tab, ic, zc, &bc);
+                        top_level = l > top_level ? l : top_level;
+                    }
+                    lw += tab->log_bg[top_level];
+                }
                 n_fg += !bh && ih >= 0 && d[ih] > fg_level;
                 n_hidden += bh != 0;
                 if (colour) {

@@ -149,6 +149,11 @@ typedef struct mvt_pf_body {
                             far above the head costs only that point: the likelihood along z had a
                             plateau above the head 1.6 nats under its peak (5 cameras), and tall
                             people's heights ran off to it; with the face point it is 5-6 nats */
+    mvt_real clear_m;    /* the column from clear_m / 3 to clear_m above the top should be
+                            background as well, >= 0, 0: not scored; default 0.9. Scored once, at the
+                            largest D of three points clear_m / 3 apart: a "top" on the legs under
+                            a hole (a shirt the colour of the wall) has the rest of the body above
+                            it, and that fragment otherwise scored as well as the true top */
 } mvt_pf_body_t;
 
 /* Pixels that other targets already explain (mvt_pft shares each camera's pixels out between its
@@ -172,7 +177,7 @@ static inline uint8_t mvt_pf_claim_depth(mvt_real z)
 /* Adds to pool->w exponent times each camera's log-likelihood (images with width 0 are skipped).
  * body NULL (point model): log D at the particle's pixel. body set (column model): log D at the
  * head, face (when face_m > 0), torso and legs points plus log max(1 - D, p_B) at the point above
- * the top. With colour (use_colour and the camera's mask has colour), the scored point (point model: the
+ * the top and (clear_m > 0) at the largest D of the three points higher up. With colour (use_colour and the camera's mask has colour), the scored point (point model: the
  * particle; column model: the torso point) adds on foreground the log of Eq. 11 x Eq. 13 at its
  * pixel, on background log(h_B s_B). A point outside the image or behind the camera reads D = p_B
  * (and log(h_B s_B)), the same as background.
@@ -185,7 +190,7 @@ static inline uint8_t mvt_pf_claim_depth(mvt_real z)
  * particle (column model: head point) has D above the midpoint between p_B and 1 on a pixel no
  * other target claims; hidden[k] (may be NULL) the fraction whose point is on a claimed pixel (the
  * view cannot tell whether this target is there: another explains what it sees).
- * O(n * num_cams) projections (column model: 4 or 5 per particle and camera). */
+ * O(n * num_cams) projections (column model: 4 to 8 per particle and camera). */
 void mvt_pf_weight(mvt_pf_pool_t *pool, const mvt_camera_t *cams, const mvt_pf_fov_t *fovs,
                    const mvt_pf_image_t *images, int num_cams, const mvt_pf_tables_t *tab, int use_colour,
                    const mvt_pf_body_t *body, mvt_real exponent, const mvt_pf_claims_t *claims,

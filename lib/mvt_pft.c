@@ -31,6 +31,7 @@ void mvt_pft_config_default(mvt_pft_config_t *c)
     c->body.legs_frac = MVT_R(0.3);
     c->body.min_top_m = MVT_R(0.9);
     c->body.face_m = MVT_R(0.16);
+    c->body.clear_m = MVT_R(0.9);
     c->num_particles = MVT_MAX_PARTICLES;
     c->use_colour = 1;
     c->lik_exponent = MVT_R(0.5);
@@ -87,7 +88,7 @@ mvt_err_t mvt_pft_init(mvt_pft_t *self, const mvt_pft_config_t *cfg, const mvt_c
         return MVT_ERR_INVALID;
     }
     if (cfg->column && (!in_range(b->above_m, MVT_R(1e-3), MVT_R(1.0)) || !in_range(b->head_m, MVT_R(1e-3), MVT_R(1.0)) ||
-                        !in_range(b->face_m, MVT_R(0.0), MVT_R(1.0)) ||
+                        !in_range(b->face_m, MVT_R(0.0), MVT_R(1.0)) || !in_range(b->clear_m, MVT_R(0.0), MVT_R(3.0)) ||
                         !in_range(b->torso_frac, MVT_R(0.01), MVT_R(0.99)) || !in_range(b->legs_frac, MVT_R(0.01), MVT_R(0.99)))) {
         return MVT_ERR_INVALID;
     }

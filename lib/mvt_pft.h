@@ -47,7 +47,7 @@ typedef struct mvt_pft_config {
                                    scored along the body under it (mvt_pf_weight); 0: the paper's
                                    point model, a particle is a point of the body */
     mvt_pf_body_t body;         /* column model: above 0.06 m, head 0.06 m, torso 0.7, legs 0.3,
-                                   lowest top 0.9 m, face 0.16 m */
+                                   lowest top 0.9 m, face 0.16 m, clear 0.9 m */
     int num_particles;          /* per target, 16..MVT_MAX_PARTICLES; default MVT_MAX_PARTICLES */
     int use_colour;             /* 1 (default): MS+C for cameras that send hue/saturation; 0: MS */
     mvt_real lik_exponent;      /* each camera's log-likelihood is multiplied by this, (0, 1]: the
@@ -66,7 +66,8 @@ typedef struct mvt_pft_config {
     mvt_real dup_dist_m;        /* >= 0; default 0.2 */
     mvt_real support_fraction;  /* (0, 1]; default 0.25 */
     int support_min_views;      /* >= 1; default 2 */
-    mvt_real lost_s;            /* > 0; default 1.0 */
+    mvt_real lost_s;            /* > 0; default 0.5 (1.0 before the face point and shared pixels: a
+                                   target lingered 1 s after its person left through a door) */
     int confirm_frames;         /* a new target is TENTATIVE until supported in this many frames,
                                    >= 1; default 5 */
     mvt_real tentative_lost_s;  /* a tentative target unsupported this long is deleted, > 0;

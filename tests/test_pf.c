@@ -248,7 +248,7 @@ static void test_weight_point_and_column_match_projection(void **state)
         mvt_pf_fov_init(&fovs[k], &g_wcams[k], 0.05f);
     }
     g_wimg[3].width = 0; /* a camera without a mask this frame: skipped */
-    const mvt_pf_body_t body = {0.06f, 0.06f, 0.7f, 0.3f, 0.9f, 0.0f}; /* no face point: see the claims test */
+    const mvt_pf_body_t body = {0.06f, 0.06f, 0.7f, 0.3f, 0.9f, 0.0f, 0.0f}; /* no face, no clear column: see the claims test */
     for (int column = 0; column <= 1; column++) {
         g_pool.n = 300;
         for (int i = 0; i < g_pool.n; i++) { /* inside the room, some outside a view's image */
@@ -299,7 +299,7 @@ static void test_weight_point_and_column_match_projection(void **state)
     }
 }
 
-/* Claims (and the column's face point): a point on a claimed pixel reads D = 1/2; its colour counts only when the claim is
+/* Claims (and the column's face point and clear column above): a point on a claimed pixel reads D = 1/2; its colour counts only when the claim is
  * farther than the point; a view's support counts unclaimed foreground only, and its hidden share
  * the head points on claimed pixels. Against the same projection reference. */
 static mvt_pf_claims_t g_claims[5];
@@ -321,7 +321,7 @@ static void test_weight_claimed_pixels_are_no_evidence(void **state)
             }
     }
     g_claims[1].width = 96; /* a size that is not the image's: ignored */
-    const mvt_pf_body_t body = {0.06f, 0.06f, 0.7f, 0.3f, 0.9f, 0.16f};
+    const mvt_pf_body_t body = {0.06f, 0.06f, 0.7f, 0.3f, 0.9f, 0.16f, 0.9f};
     const int fg_level = (tab.d_floor + 255) / 2;
     int claimed_points = 0, farther_colour = 0;
     g_pool.n = 300;
@@ -341,9 +341,10 @@ static void test_weight_claimed_pixels_are_no_evidence(void **state)
         for (int k = 0; k < 5; k++) {
             if (k == 3) continue;
             const double x = g_pool.x[i], y = g_pool.y[i], z = g_pool.z[i];
-            const double pts[5][3] = {{x, y, z + 0.06}, {x, y, z - 0.06}, {x, y, 0.7 * z}, {x, y, 0.3 * z}, {x, y, z - 0.16}};
-            int lv[5], idx[5], behind[5];
-            for (int j = 0; j < 5; j++) {
+            const double pts[8][3] = {{x, y, z + 0.06}, {x, y, z - 0.06}, {x, y, 0.7 * z}, {x, y, 0.3 * z},
+                                      {x, y, z - 0.16}, {x, y, z + 0.3}, {x, y, z + 0.6}, {x, y, z + 0.9}};
+            int lv[8], idx[8], behind[8];
+            for (int j = 0; j < 8; j++) {
                 lv[j] = ref_level(k, pts[j], &tab, &idx[j]);
                 behind[j] = 0;
                 if (k != 1 && idx[j] >= 0 && g_claims[k].depth[idx[j]] != 0) {
@@ -355,7 +356,9 @@ static void test_weight_claimed_pixels_are_no_evidence(void **state)
                     claimed_points++;
                 }
             }
-            double lw = tab.log_bg[lv[0]] + tab.log_d[lv[1]] + tab.log_d[lv[2]] + tab.log_d[lv[3]] + tab.log_d[lv[4]];
+            const int clear = lv[5] > lv[6] ? (lv[5] > lv[7] ? lv[5] : lv[7]) : (lv[6] > lv[7] ? lv[6] : lv[7]);
+            double lw = tab.log_bg[lv[0]] + tab.log_d[lv[1]] + tab.log_d[lv[2]] + tab.log_d[lv[3]] + tab.log_d[lv[4]] +
+                        tab.log_bg[clear];
             n_fg[k] += !behind[1] && lv[1] > fg_level;
             n_hid[k] += behind[1] != 0;
             if (g_wmask[k].has_colour) {

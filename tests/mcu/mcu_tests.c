@@ -343,7 +343,7 @@ static void pf_run(const mvt_pf_tables_t *tab, const mvt_pf_fov_t *fovs, uint64_
         p->h[i] = p->s[i] = 0.0f;
     }
     const mvt_pf_noise_t noise = {0.02f, 0.05f, 0.0f, 0.0f, 0.0f, 2.2f, 0.02f, 0.05f};
-    const mvt_pf_body_t body = {0.06f, 0.06f, 0.7f, 0.3f, 0.9f, 0.16f};
+    const mvt_pf_body_t body = {0.06f, 0.06f, 0.7f, 0.3f, 0.9f, 0.16f, 0.9f};
     for (int f = 0; f < 40; f++) {
         mvt_pf_predict(p, 0.04f, &noise, &rng);
         for (int i = 0; i < p->n; i++) {
