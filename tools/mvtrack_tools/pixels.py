@@ -11,7 +11,8 @@ truth) and per rig one camera view with the detections and the tracks reprojecte
 
 Rigs: `--rigs 0 11` means the smart room (0) and the random room and rig of seed 11 (5 cameras,
 other room size, placements, lenses and image sizes). Videos are kept under out/pixels/video/ and
-reused when present (--fresh renders again).
+reused when present; so are the detections, while the detector binary and its arguments are the same
+(--fresh renders and detects again).
 
     tools/mvtrack pixels [--scenes crowd interaction] [--seeds 3] [--rigs 0 11] [--modes pkf pf]
                          [--seconds 60] [--jobs 2] [--out out/pixels]
@@ -34,6 +35,7 @@ from .detect import run as run_detect
 from .experiment1 import run_daemon
 from .lcmio import LogWriter, read_log
 from .mot import as_dict, clear_mot, pair_frames
+from .detect import DETECT
 from .paths import DAEMON
 from .pf_run import head_stats
 from .rig import Rig, random_rig, smartroom
@@ -86,18 +88,32 @@ def prepare(out: Path, rig_seed: int, cameras: int, kind: str, seed: int, second
     return rig, rig_path, truth, info
 
 
-def detect(rig: Rig, d: Path, det: Path, lead: int, extra: list[str], progress: bool) -> float:
-    """mvtrack-detect over every camera's video; video frame i is stamped as scene frame i - lead."""
+def detect(rig: Rig, d: Path, det: Path, lead: int, extra: list[str], progress: bool, fresh: bool) -> float:
+    """mvtrack-detect over every camera's video; video frame i is stamped as scene frame i - lead.
+
+    The detections are reused when the same detector binary already ran with the same arguments on
+    the same videos (a stamp beside them records the binary's hash, the arguments and the videos'
+    stamp); --fresh runs it again. Returns the detection time (of the run that made them)."""
     start = T0_UTIME - int(round(lead * 1e6 / rig.frame_rate))
     args = ["--rig", str(d / "rig.yaml"), "--out", f"file://{det}?mode=w", "--start-utime", str(start), "--masks",
             "--status-s", "0", "--quiet"]
     for c in rig.cameras:
         args += ["--video", f"{c.name}={d / (c.name + '.avi')}"]
+    stamp = d / "detections.json"
+    key = {"detector_sha": hashlib.sha1(DETECT.read_bytes()).hexdigest(), "args": args + extra,
+           "videos": (d / "done.json").read_text()}
+    if not fresh and det.exists() and stamp.exists():
+        old = json.loads(stamp.read_text())
+        if old.get("key") == key:
+            return float(old["detect_s"])
+    stamp.unlink(missing_ok=True)
     t0 = time.perf_counter()
     rc = run_detect(args + extra, progress=progress, desc=f"detect {d.name}")
     if rc != 0:
         raise RuntimeError(f"mvtrack-detect failed ({rc}) on {d}")
-    return time.perf_counter() - t0
+    dt = time.perf_counter() - t0
+    stamp.write_text(json.dumps({"key": key, "detect_s": round(dt, 1)}))
+    return dt
 
 
 def camera_view(path: Path, rig: Rig, d: Path, det: Path, trk: Path, k: int, frame: int, lead: int, title: str) -> None:
@@ -159,7 +175,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--detect-args", default="", metavar="ARGS", help="more mvtrack-detect options")
     ap.add_argument("--daemon-args", default="", metavar="ARGS", help="more mvtrackd options for every run")
     ap.add_argument("--jobs", type=int, default=2, help="processes rendering cameras (default 2)")
-    ap.add_argument("--fresh", action="store_true", help="render the videos again even when present")
+    ap.add_argument("--fresh", action="store_true",
+                    help="render the videos and run the detector again even when their outputs are current")
     ap.add_argument("--no-plots", action="store_true")
     ap.add_argument("--quiet", action="store_true", help="no progress bars")
     a = ap.parse_args(argv)
@@ -177,7 +194,7 @@ def main(argv: list[str] | None = None) -> int:
                                                      progress)
                 d = rig_path.parent
                 det = d / "detections.lcm"
-                det_s = detect(rig, d, det, info["lead_in_frames"], shlex.split(a.detect_args), progress)
+                det_s = detect(rig, d, det, info["lead_in_frames"], shlex.split(a.detect_args), progress, a.fresh)
                 gt = read_log(str(truth), lambda c: c == "GROUND_TRUTH")
                 for mode in a.modes:
                     trk = d / f"tracks_{mode}.lcm"
