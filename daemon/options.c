@@ -43,6 +43,11 @@ static void usage(FILE *f)
             "                      cannot share one body (0: the paper's independent filters); other\n"
             "                      modes: a track seen by fewer than two cameras is kept this far\n"
             "                      from the others\n"
+            "  --recover S         identity recovery: a person whose track was deleted while they may\n"
+            "                      still be in the room (unseen, hidden too long, contradicted) keeps\n"
+            "                      their identity S seconds, for a person born within walking reach\n"
+            "                      at their head height (pf: born from the same blob track); default\n"
+            "                      3, 0 = off\n"
             "  --occlusion box|off a confirmed track a camera did not update although it lies inside\n"
             "                      the box of a blob given to another track is hidden there: box\n"
             "                      (default) keeps it in the box's columns and alive; off: missed\n"
@@ -229,13 +234,14 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
         {"seed", required_argument, 0, 'S'},     {"publish-particles", required_argument, 0, 'Q'},
         {"particle-model", required_argument, 0, 'B'}, {"state", required_argument, 0, 'T'},
         {"motion", required_argument, 0, 'N'},   {"motion-models", required_argument, 0, 'W'},
-        {"pixels", required_argument, 0, 'x'},
+        {"pixels", required_argument, 0, 'x'},   {"recover", required_argument, 0, 'R'},
         {0, 0, 0, 0}};
     int opt;
     optind = 1; /* callable more than once (tests, fuzzer) */
     long particles = MVT_MAX_PARTICLES, seed = 1, publish_particles = 0;
     double exclusion_m = -1.0; /* mode-dependent default */
-    while ((opt = getopt_long(argc, argv, "r:i:o:m:g:c:q:s:d:M:O:vhP:X:S:Q:B:T:N:W:x:", opts, NULL)) != -1) {
+    double recover_s = -1.0;   /* the library's default */
+    while ((opt = getopt_long(argc, argv, "r:i:o:m:g:c:q:s:d:M:O:vhP:X:S:Q:B:T:N:W:x:R:", opts, NULL)) != -1) {
         switch (opt) {
         case 'r': rig_path = optarg; break;
         case 'i': in_url = optarg; break;
@@ -295,6 +301,15 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
             }
             break;
         }
+        case 'R': {
+            char *end = NULL;
+            recover_s = strtod(optarg, &end);
+            if (end == optarg || *end != '\0' || !(recover_s >= 0.0) || recover_s > 3600.0) {
+                fprintf(stderr, "mvtrackd: --recover needs seconds in [0, 3600], got '%s'\n", optarg);
+                return 2;
+            }
+            break;
+        }
         case 'v': d->verbose = 1; break;
         case 'h': usage(stdout); return 0;
         default: usage(stderr); return 2;
@@ -347,6 +362,9 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
         exclusion_m = mi >= 5 ? 0.5 : 0.4;
     }
     cfg.exclusion_m = (mvt_real)exclusion_m;
+    if (recover_s >= 0.0) {
+        cfg.recover_s = (mvt_real)recover_s;
+    }
     if (vi == 1) {
         mvt_imm_config_single(&cfg.motion, q);
     } else if (models != NULL && parse_models(models, &cfg.motion) != 0) {
@@ -392,6 +410,9 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
         pcfg.column = bi == 0;
         pcfg.share_pixels = xi == 0;
         pcfg.exclusion_m = (mvt_real)exclusion_m;
+        if (recover_s >= 0.0) {
+            pcfg.recover_s = (mvt_real)recover_s;
+        }
         pcfg.seed = (uint64_t)seed;
         if (mvt_pft_init(&pft, &pcfg, cams, d->rig.num_cameras) != MVT_OK) {
             fprintf(stderr, "mvtrackd: invalid particle-filter configuration\n");

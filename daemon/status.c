@@ -111,6 +111,7 @@ void mvtd_publish_status(mvtd_t *d)
     st.deleted_occluded = (int64_t)c->deleted_occluded;
     st.deleted_contradicted = (int64_t)c->deleted_contradicted;
     st.tracks_reacquired = (int64_t)c->reacquired;
+    st.identities_recovered = (int64_t)c->identities_recovered;
     st.masks_decoded = d->masks_decoded;
     st.masks_rejected = d->masks_rejected;
     if (d->pf) {
@@ -132,6 +133,7 @@ void mvtd_publish_status(mvtd_t *d)
         st.deleted_outside = (int64_t)pc->deleted_outside;
         st.deleted_duplicate = (int64_t)pc->deleted_duplicate;
         st.tracks_dropped_capacity = (int64_t)pc->births_refused_full;
+        st.identities_recovered = (int64_t)pc->identities_recovered;
     }
     st.shed_other_channels = d->cam_shed[d->rig.num_cameras];
     st.checkpoint_age_s = -1.0f;

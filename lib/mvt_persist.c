@@ -113,6 +113,22 @@ void mvt_tracker_save(const mvt_tracker_t *self, mvt_tracker_persist_t *out)
     out->have_time = self->have_time;
     out->last_utime_us = self->last_utime_us;
     out->counters = self->counters;
+    memcpy(out->lost, self->lost, sizeof(out->lost));
+}
+
+/* A lost identity (free, or kept for recovery): a place, a covariance with a non-negative
+ * diagonal, times in order. A held record must carry its track's identity. */
+static int lost_ok(const mvt_tracker_config_t *c, const mvt_lost_t *r, int64_t now)
+{
+    static const mvt_real zero[3] = {0};
+    if (r->id == 0) {
+        return 1;
+    }
+    return r->id > 0 && r->reserved == 0 && time_ok(r->lost_us, now) && r->until_us >= r->lost_us &&
+           r->until_us <= now + (INT64_C(1) << 60) && mvt_la_all_finite(r->x, 3) &&
+           mvt_la_all_finite(r->P, 9) && place_ok(c, r->x, zero) && r->P[0] >= MVT_R(0.0) && r->P[4] >= MVT_R(0.0) &&
+           r->P[8] >= MVT_R(0.0) && r->P[0] <= MVT_PERSIST_MAX_VAR && r->P[4] <= MVT_PERSIST_MAX_VAR &&
+           r->P[8] <= MVT_PERSIST_MAX_VAR;
 }
 
 static int tracker_state_ok(const mvt_tracker_config_t *c, const mvt_tracker_persist_t *p)
@@ -131,21 +147,46 @@ static int tracker_state_ok(const mvt_tracker_config_t *c, const mvt_tracker_per
         const int64_t now = p->last_utime_us;
         if (tr->id < 0 || !p->have_time || !status_ok(tr->status) || !estimate_ok(c, &tr->s, now) ||
             !time_ok(tr->last_update_us, now) || !time_ok(tr->last_explained_us, now) ||
-            !time_ok(tr->last_consistent_us, now) || tr->misses < 0 || !bank_ok(c, tr)) {
+            !time_ok(tr->last_consistent_us, now) || tr->misses < 0 || !bank_ok(c, tr) ||
+            !lost_ok(c, &tr->held, now) || !(tr->seen_z >= c->volume_min[2] - MVT_PERSIST_SLACK_M && tr->seen_z <= c->volume_max[2] + MVT_PERSIST_SLACK_M) ||
+            !(tr->seen_zz >= MVT_R(0.0) && tr->seen_zz <= MVT_PERSIST_MAX_VAR) ||
+            (tr->held.id != 0 && (tr->held.id != tr->id || tr->status != MVT_TRACK_TENTATIVE))) {
             return 0;
         }
     }
-    return ids_unique(ids, MVT_MAX_TARGETS);
+    /* every identity at most once: live tracks and kept ones together */
+    int32_t all[MVT_MAX_TARGETS + MVT_MAX_LOST];
+    memcpy(all, ids, sizeof(ids));
+    for (int i = 0; i < MVT_MAX_LOST; i++) {
+        if (!lost_ok(c, &p->lost[i], p->last_utime_us) || (p->lost[i].id != 0 && !p->have_time)) {
+            return 0;
+        }
+        all[MVT_MAX_TARGETS + i] = p->lost[i].id;
+    }
+    return ids_unique(all, MVT_MAX_TARGETS + MVT_MAX_LOST);
 }
 
-static void shift_track_clocks(mvt_track_t *tracks, int64_t by_us)
+/* An outage does not use up a kept identity's time (until), but the person walked meanwhile: the
+ * reach still counts from the deletion (lost_us). */
+static void shift_lost_clocks(mvt_lost_t *r, int64_t by_us)
+{
+    if (r->id != 0) {
+        r->until_us += by_us;
+    }
+}
+
+static void shift_track_clocks(mvt_track_t *tracks, mvt_lost_t *lost, int64_t by_us)
 {
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         if (tracks[t].id != 0) {
             tracks[t].last_update_us += by_us;
             tracks[t].last_explained_us += by_us;
             tracks[t].last_consistent_us += by_us;
+            shift_lost_clocks(&tracks[t].held, by_us);
         }
+    }
+    for (int i = 0; i < MVT_MAX_LOST; i++) {
+        shift_lost_clocks(&lost[i], by_us);
     }
 }
 
@@ -161,7 +202,8 @@ mvt_err_t mvt_tracker_resume(mvt_tracker_t *self, const mvt_tracker_persist_t *p
         return MVT_ERR_INVALID;
     }
     memcpy(self->tracks, p->tracks, sizeof(self->tracks));
-    shift_track_clocks(self->tracks, unobserved_us);
+    memcpy(self->lost, p->lost, sizeof(self->lost));
+    shift_track_clocks(self->tracks, self->lost, unobserved_us);
     self->next_id = p->next_id;
     self->have_time = p->have_time;
     self->last_utime_us = p->last_utime_us;

@@ -54,6 +54,7 @@ void mvt_tracker_config_default(mvt_tracker_config_t *c)
     c->contra_views = 2;
     c->contra_max_s = MVT_R(0.5);
     c->p_detect = MVT_R(0.9);
+    c->recover_s = MVT_R(3.0);
 }
 
 static int config_ok(const mvt_tracker_config_t *c)
@@ -80,6 +81,7 @@ static int config_ok(const mvt_tracker_config_t *c)
            c->exclusion_m >= MVT_R(0.0) && isfinite(c->exclusion_m) &&
            c->contra_views >= 1 && c->contra_max_s > MVT_R(0.0) && isfinite(c->contra_max_s) &&
            c->p_detect > MVT_R(0.0) && c->p_detect < MVT_R(1.0) &&
+           c->recover_s >= MVT_R(0.0) && c->recover_s <= MVT_R(3600.0) &&
            (c->merge == MVT_MERGE_NEITHER || c->merge == MVT_MERGE_SHARE || c->merge == MVT_MERGE_OFF ||
             c->merge == MVT_MERGE_TOP) &&
            (c->filter == MVT_FILTER_PROJECTIVE || c->filter == MVT_FILTER_TRIANGULATE) &&

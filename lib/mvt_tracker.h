@@ -137,6 +137,14 @@ typedef struct mvt_tracker_config {
                                    place in no blob by 1 - p_detect; it is born when the product is
                                    >= 1. A tentative or confirmed track is refuted in a frame the
                                    same way */
+    mvt_real recover_s;         /* identity recovery: a confirmed track deleted while its person may
+                                   still be in the room (unseen, hidden too long, contradicted; not
+                                   one that left through a side wall or the volume, nor one too
+                                   uncertain to have a place, nor a duplicate) keeps its identity
+                                   this long, and a person born
+                                   within walking reach of where it was lost (init_vel_std_ms times
+                                   the time since, plus both covariances), at its head height, takes
+                                   it back; >= 0 (0: off), default 3 */
 } mvt_tracker_config_t;
 
 /* One detection as the core needs it (raw distorted pixels). */
@@ -221,7 +229,28 @@ typedef struct mvt_counters {
                                          their place empty (p_detect) */
     uint64_t reacquired;              /* tracks lost for a while whose detections were chosen jointly
                                          in 3D (mvt_trk_reacquire) */
+    uint64_t identities_recovered;    /* tracks confirmed with the identity of a track lost within
+                                         recover_s (identity recovery) */
 } mvt_counters_t;
+
+/* A lost identity kept for recovery (recover_s). */
+typedef struct mvt_lost {
+    int32_t id;                 /* 0: free */
+    int32_t reserved;           /* zero */
+    int64_t lost_us;            /* when its track was deleted */
+    int64_t until_us;           /* kept until then */
+    mvt_real x[3];              /* position when deleted (x, y as predicted then; z the height the
+                                   last frame the track was seen) */
+    mvt_real P[9];              /* its covariance (3x3, row-major; z uncorrelated) */
+} mvt_lost_t;
+
+/* Lost identities kept at once (the oldest gives way). */
+#ifndef MVT_MAX_LOST
+#define MVT_MAX_LOST 16
+#endif
+#if MVT_MAX_LOST < 1 || MVT_MAX_LOST > 1024
+#error "MVT_MAX_LOST must be in 1..1024"
+#endif
 
 typedef struct mvt_track {
     int32_t id;                 /* 0: free slot */
@@ -238,6 +267,11 @@ typedef struct mvt_track {
     int64_t last_update_us;     /* last frame seen */
     int64_t last_explained_us;  /* last frame seen, or seen and hidden in enough views */
     int64_t last_consistent_us; /* last frame seen, or contradicted by fewer than contra_views */
+    mvt_real seen_z, seen_zz;   /* head height and its variance the last frame seen: a coasting
+                                   track's height spreads with the motion models' vertical noise,
+                                   a person's does not (identity recovery compares this) */
+    mvt_lost_t held;            /* tentative track born with a lost identity (held.id == id): the
+                                   record it took, given back if the track dies tentative */
 } mvt_track_t;
 
 /* Multi-view birth candidates examined per frame (the best are kept; the excess is counted). */
@@ -265,6 +299,7 @@ typedef struct mvt_tracker {
     int64_t last_utime_us;
     int have_time;
     mvt_counters_t counters;
+    mvt_lost_t lost[MVT_MAX_LOST];     /* identities kept for recovery */
     /* per-frame workspaces (no state carried between frames) */
     mvt_pkf_meas_t meas[MVT_MAX_CAMERAS][MVT_MAX_DETECTIONS];
     uint8_t meas_ok[MVT_MAX_CAMERAS][MVT_MAX_DETECTIONS];
@@ -322,7 +357,7 @@ int mvt_tracker_select(const mvt_tracker_t *self, int cam, const mvt_detection_t
                        int keep[MVT_MAX_DETECTIONS]);
 
 /* What a tracker carries from one frame to the next, and nothing else: its tracks, the next
- * identity, its clock and its counters (the configuration and cameras come from the caller, the
+ * identity, the identities kept for recovery, its clock and its counters (the configuration and cameras come from the caller, the
  * workspaces are rebuilt every frame). Pointer-free and fixed-size, so a caller may store it as
  * bytes (a daemon's checkpoint) and give it back to a tracker built with the same configuration. */
 typedef struct mvt_tracker_persist {
@@ -331,6 +366,7 @@ typedef struct mvt_tracker_persist {
     int32_t have_time;
     int64_t last_utime_us;
     mvt_counters_t counters;
+    mvt_lost_t lost[MVT_MAX_LOST];
 } mvt_tracker_persist_t;
 
 /* Copies the persistent part of the tracker into out (padding zeroed: equal states give equal

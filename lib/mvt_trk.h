@@ -19,6 +19,26 @@ static inline int mvt_trk_popcount(uint32_t x)
     return n;
 }
 
+/* The spread of a person's head-top height over seconds (gait bob, posture), metres: the height
+ * cue of re-acquisition and of identity recovery. */
+#define MVT_TRK_HEAD_SD_M MVT_R(0.04)
+/* chi-square, 3 degrees of freedom, 99.9 %: the gate of both */
+#define MVT_TRK_GATE3 MVT_R(16.27)
+
+/* Mahalanobis distance squared of b from a, covariance Pa + Pb (3x3 each); < 0 if singular. */
+mvt_real mvt_trk_mahalanobis3(const mvt_real a[3], const mvt_real Pa[9], const mvt_real b[3], const mvt_real Pb[9]);
+
+/* Identity recovery (mvt_trk_recover.c). A confirmed track deleted while its person may still be
+ * in the room (unseen, hidden too long, contradicted, too uncertain) leaves its identity, position
+ * and covariance for recover_s. A birth within reach of such a record (the Mahalanobis distance
+ * of the birth's point from the record, the record's covariance grown by walking pace times the
+ * time since, heights compared with MVT_TRK_HEAD_SD_M) takes the nearest record's identity; a
+ * tentative track that dies gives it back. O(MVT_MAX_LOST) each. */
+void mvt_trk_lose(mvt_tracker_t *self, const mvt_track_t *tr, int64_t now_us);
+void mvt_trk_give_back(mvt_tracker_t *self, mvt_track_t *tr, int64_t now_us);
+int32_t mvt_trk_recover(mvt_tracker_t *self, const mvt_real x[3], const mvt_real cov[9], int64_t now_us,
+                        mvt_lost_t *held);
+
 /* Hypothesise + associate for camera k (tracks already predicted to the camera's capture time):
  * fills assign[t] with the detection that updates track t (or -1) and merged[t] with 1 when that
  * detection is shared with unresolved tracks (its covariance is widened by merge_cov[t]). Marks

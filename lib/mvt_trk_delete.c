@@ -10,9 +10,11 @@
  * or when its covariance cannot be repaired. A track unseen for exit_coast_s near the volume's
  * side walls is deleted sooner (people leave through the sides). Of two tracks closer than
  * dup_dist_m in 3D (one person, two tracks), the younger one is deleted. Identities of deleted
- * tracks are never reused.
+ * tracks are never given to another person; a confirmed track deleted while its person may still
+ * be in the room leaves its identity for recovery (mvt_trk_recover.c).
  */
 #include <stddef.h>
+#include <string.h>
 
 #include "mvt_trk.h"
 
@@ -28,7 +30,7 @@ static int near_side_wall(const mvt_tracker_config_t *c, const mvt_real x[3])
 
 /* Deletes the younger of every pair of live tracks closer than dup_dist_m (confirmed beats
  * tentative, then the older identity wins). O(T^2). */
-static void delete_duplicates(mvt_tracker_t *self)
+static void delete_duplicates(mvt_tracker_t *self, int64_t now_us)
 {
     const mvt_real r2 = self->cfg.dup_dist_m * self->cfg.dup_dist_m;
     if (!(r2 > MVT_R(0.0))) {
@@ -48,6 +50,7 @@ static void delete_duplicates(mvt_tracker_t *self)
             const int a_conf = a->status != MVT_TRACK_TENTATIVE, b_conf = b->status != MVT_TRACK_TENTATIVE;
             const int drop_a = a_conf != b_conf ? !a_conf : a->id > b->id;
             mvt_track_t *victim = drop_a ? a : b;
+            mvt_trk_give_back(self, victim, now_us); /* a tentative holding a lost identity */
             victim->id = 0;
             self->counters.deletions++;
             self->counters.duplicates_deleted++;
@@ -80,6 +83,8 @@ void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us)
             tr->last_consistent_us = now_us;
         }
         if (hit) {
+            tr->seen_z = tr->s.x[2];
+            tr->seen_zz = tr->s.P[14];
             tr->misses = 0;
             tr->last_update_us = now_us;
             tr->last_explained_us = now_us;
@@ -104,6 +109,10 @@ void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us)
                 reason = &self->counters.deleted_tentative;
             } else if (mvt_trk_popcount(tr->hit_history & window) >= c->confirm_hits) {
                 tr->status = MVT_TRACK_CONFIRMED;
+                if (tr->held.id != 0) { /* a lost identity recovered */
+                    self->counters.identities_recovered++;
+                    memset(&tr->held, 0, sizeof(tr->held));
+                }
             }
             break;
         case MVT_TRACK_CONFIRMED:
@@ -133,9 +142,16 @@ void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us)
             if (reason != &self->counters.numeric_faults) {
                 (*reason)++;
             }
+            if (tr->status == MVT_TRACK_TENTATIVE) {
+                mvt_trk_give_back(self, tr, now_us);
+            } else if (reason == &self->counters.deleted_unseen || reason == &self->counters.deleted_occluded ||
+                       reason == &self->counters.deleted_contradicted) {
+                mvt_trk_lose(self, tr, now_us); /* the person may still be here; one that left, or
+                                                    whose place is unknown, is not kept */
+            }
             tr->id = 0;
             self->counters.deletions++;
         }
     }
-    delete_duplicates(self);
+    delete_duplicates(self, now_us);
 }

@@ -253,12 +253,20 @@ static void birth(mvt_tracker_t *self, const mvt_frame_t *frame, const mvt_birth
     }
     mvt_track_t *tr = &self->tracks[slot];
     memset(tr, 0, sizeof(*tr));
-    tr->id = self->next_id++;
-    if (self->next_id <= 0) { /* 2^31 births: wrap to 1 rather than reuse 0 or go negative */
-        self->next_id = 1;
-    }
     tr->status = c->confirm_hits <= 1 ? MVT_TRACK_CONFIRMED : MVT_TRACK_TENTATIVE;
+    tr->id = mvt_trk_recover(self, x, cov, frame->utime_us, &tr->held); /* a person lost just now? */
+    if (tr->id == 0) {
+        tr->id = self->next_id++;
+        if (self->next_id <= 0) { /* 2^31 births: wrap to 1 rather than reuse 0 or go negative */
+            self->next_id = 1;
+        }
+    } else if (tr->status == MVT_TRACK_CONFIRMED) {
+        self->counters.identities_recovered++;
+        memset(&tr->held, 0, sizeof(tr->held));
+    }
     mvt_trk_start(self, tr, x, cov, frame->utime_us);
+    tr->seen_z = x[2];
+    tr->seen_zz = cov[8];
     tr->cameras_used = bits;
     tr->hit_history = 1u;
     tr->last_update_us = frame->utime_us;

@@ -16,7 +16,7 @@
  * gap (its white acceleration lets the height wander by q_z t^3 / 3: 0.2 m after 1.3 s with the
  * default q_z), while a walking or standing person's head stays within a few centimetres of its
  * height (gait). The height is compared unextrapolated, with the track's variance plus
- * MVT_REACQ_HEAD_SD_M squared.
+ * MVT_TRK_HEAD_SD_M squared.
  */
 #include <string.h>
 
@@ -24,13 +24,8 @@
 #include "mvt_linalg.h"
 #include "mvt_trk.h"
 
-/* chi-square, 3 degrees of freedom, 99.9 % */
-#define MVT_REACQ_GATE MVT_R(16.27)
-/* the spread of a person's head-top height over time (gait bob, posture), metres */
-#define MVT_REACQ_HEAD_SD_M MVT_R(0.04)
 
-/* Mahalanobis distance squared of b from a, covariance Pa + Pb (3x3 each); < 0 if singular. */
-static mvt_real mahalanobis3(const mvt_real a[3], const mvt_real Pa[9], const mvt_real b[3], const mvt_real Pb[9])
+mvt_real mvt_trk_mahalanobis3(const mvt_real a[3], const mvt_real Pa[9], const mvt_real b[3], const mvt_real Pb[9])
 {
     mvt_real S[9], Si[9];
     for (int i = 0; i < 9; i++) {
@@ -80,7 +75,7 @@ static void lost_prediction(const mvt_tracker_t *self, int t, mvt_real x[3], mvt
         }
     }
     x[2] = tr->s.x[2];
-    P[8] = tr->s.P[2 * 6 + 2] + MVT_REACQ_HEAD_SD_M * MVT_REACQ_HEAD_SD_M;
+    P[8] = tr->s.P[2 * 6 + 2] + MVT_TRK_HEAD_SD_M * MVT_TRK_HEAD_SD_M;
 }
 
 /* The distinct candidates of this frame, best first: none shares a detection with a better one. */
@@ -149,8 +144,8 @@ void mvt_trk_reacquire(mvt_tracker_t *self, const mvt_frame_t *frame, const int 
             if (tr->id == 0 || lost[t]) {
                 continue;
             }
-            const mvt_real d2 = mahalanobis3(self->rq_tx[t], self->rq_tP[t], self->rq_x[i], self->rq_cov[i]);
-            taken = d2 >= MVT_R(0.0) && d2 <= MVT_REACQ_GATE;
+            const mvt_real d2 = mvt_trk_mahalanobis3(self->rq_tx[t], self->rq_tP[t], self->rq_x[i], self->rq_cov[i]);
+            taken = d2 >= MVT_R(0.0) && d2 <= MVT_TRK_GATE3;
         }
         if (!taken) {
             cols[n_cols++] = i;
@@ -167,11 +162,11 @@ void mvt_trk_reacquire(mvt_tracker_t *self, const mvt_frame_t *frame, const int 
         mvt_real *row = &self->cl_cost[r * ncol];
         for (int j = 0; j < n_cols; j++) {
             const int i = cols[j];
-            const mvt_real d2 = mahalanobis3(x, P, self->rq_x[i], self->rq_cov[i]);
-            row[j] = d2 >= MVT_R(0.0) && d2 <= MVT_REACQ_GATE ? d2 : MVT_R(-1.0);
+            const mvt_real d2 = mvt_trk_mahalanobis3(x, P, self->rq_x[i], self->rq_cov[i]);
+            row[j] = d2 >= MVT_R(0.0) && d2 <= MVT_TRK_GATE3 ? d2 : MVT_R(-1.0);
         }
         for (int j = 0; j < n_rows; j++) {
-            row[n_cols + j] = j == r ? MVT_REACQ_GATE : MVT_R(-1.0);
+            row[n_cols + j] = j == r ? MVT_TRK_GATE3 : MVT_R(-1.0);
         }
     }
     for (int t = 0; t < MVT_MAX_TARGETS; t++) { /* only now: the common frame has no lost track */

@@ -370,7 +370,8 @@ static void test_mvt_tracker_step_person_returns_new_identity(void **state)
     }
     first = id_near(X[0]);
     assert_true(first > 0);
-    for (int f = 0; f < 100; f++, t += 40000) { /* gone for 4 s: deleted */
+    for (int f = 0; f < 175; f++, t += 40000) { /* gone for 7 s: deleted after 2 s, its identity
+                                                    kept for recovery 3 s more, then let go */
         frame_of(X, 0, t, &rng, 2.0, 0);
         mvt_tracker_step(&g_tracker, &g_frame, &g_out);
     }
@@ -382,6 +383,69 @@ static void test_mvt_tracker_step_person_returns_new_identity(void **state)
     const int32_t second = id_near(X[0]);
     assert_true(second > first);
     assert_null(find_id(first));
+    assert_int_equal(g_tracker.counters.identities_recovered, 0);
+}
+
+/* Identity recovery. A person whose track is deleted while they are still in the room (here: the
+ * detector loses them for 2.4 s) and who is born again soon after, within walking reach and at
+ * their head height, keeps their identity; someone of another height at the same place, someone
+ * out of walking reach, or anyone after recover_s does not. Returns the identity of the person
+ * born at `back` after the person at X was lost; *was receives the lost identity. */
+static int32_t g_new; /* lost_and_born's result (C leaves the order of `f(&x) > x` open) */
+static int32_t lost_and_born(const mvt_real back[3], double gap_s, mvt_real recover_s, int32_t *was)
+{
+    init();
+    g_tracker.cfg.recover_s = recover_s;
+    test_rng_t rng = {23};
+    const mvt_real X[1][3] = {{3.0f, 2.5f, 1.75f}};
+    int64_t t = 1000000;
+    for (int f = 0; f < 25; f++, t += 40000) {
+        frame_of(X, 1, t, &rng, 2.0, 0);
+        mvt_tracker_step(&g_tracker, &g_frame, &g_out);
+    }
+    *was = id_near(X[0]);
+    assert_true(*was > 0);
+    const int gap = (int)(gap_s * 25.0 + 0.5);
+    for (int f = 0; f < gap; f++, t += 40000) {
+        frame_of(X, 0, t, &rng, 2.0, 0);
+        mvt_tracker_step(&g_tracker, &g_frame, &g_out);
+    }
+    assert_null(find_id(*was)); /* deleted: its person unseen for coast_max_s */
+    const mvt_real B[1][3] = {{back[0], back[1], back[2]}};
+    for (int f = 0; f < 10; f++, t += 40000) {
+        frame_of(B, 1, t, &rng, 2.0, 0);
+        mvt_tracker_step(&g_tracker, &g_frame, &g_out);
+    }
+    const int32_t id = id_near(B[0]);
+    assert_true(id > 0);
+    g_new = id;
+    for (int i = 0; i < g_out.num_tracks; i++) { /* one confirmed track, the one at B */
+        assert_true(g_out.tracks[i].id == id || g_out.tracks[i].status == MVT_TRACK_TENTATIVE);
+    }
+    return id;
+}
+
+static void test_mvt_tracker_step_person_lost_and_back_keeps_identity(void **state)
+{
+    (void)state;
+    int32_t was = 0;
+    /* back 0.3 m away at the same height, 2.4 s after the last detection (0.4 s after deletion) */
+    const mvt_real near_same[3] = {3.2f, 2.7f, 1.76f};
+    const int32_t back = lost_and_born(near_same, 2.4, 3.0f, &was);
+    assert_int_equal(back, was);
+    assert_int_equal(g_tracker.counters.identities_recovered, 1);
+    assert_true(g_tracker.counters.deleted_unseen == 1);
+    /* the same with recovery off: a new identity */
+    assert_true(lost_and_born(near_same, 2.4, 0.0f, &was) > 0 && g_new > was);
+    /* 0.3 m shorter at the same place: another person */
+    const mvt_real shorter[3] = {3.1f, 2.6f, 1.45f};
+    assert_true(lost_and_born(shorter, 2.4, 3.0f, &was) > 0 && g_new > was);
+    assert_int_equal(g_tracker.counters.identities_recovered, 0);
+    /* 3 m away 0.4 s after the deletion: out of walking reach */
+    const mvt_real far[3] = {5.0f, 0.6f, 1.75f};
+    assert_true(lost_and_born(far, 2.4, 3.0f, &was) > 0 && g_new > was);
+    /* after recover_s: let go */
+    assert_true(lost_and_born(near_same, 5.6, 3.0f, &was) > 0 && g_new > was);
 }
 
 /* A short person walks into the middle of a group of three tall ones, stands there 3 s (hidden in
@@ -633,6 +697,7 @@ int main(void)
         cmocka_unit_test(test_mvt_tracker_step_false_alarm_flood_confirmed_tracks_survive),
         cmocka_unit_test(test_mvt_tracker_step_more_people_than_capacity_births_refused_counted),
         cmocka_unit_test(test_mvt_tracker_step_person_returns_new_identity),
+        cmocka_unit_test(test_mvt_tracker_step_person_lost_and_back_keeps_identity),
         cmocka_unit_test(test_mvt_tracker_select_under_capacity_keeps_all_in_order),
         cmocka_unit_test(test_mvt_tracker_step_hidden_in_group_keeps_identity),
         cmocka_unit_test(test_mvt_tracker_step_vanished_person_contradicted_deleted),

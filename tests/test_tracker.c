@@ -331,13 +331,17 @@ static void test_mvt_tracker_step_unseen_track_coasts_then_dies(void **state)
     /* deleted by coast_max_s = 2 s at 25 fps, or a little earlier when the position std passes
      * max_pos_std_m = 1 m (q = 0.5 m^2/s^3: sqrt(q t^3 / 3) = 1 m at t = 1.8 s) */
     assert_true(coasting >= 40 && coasting <= 51);
-    /* re-acquired as a new identity: ids are never reused */
+    assert_int_equal(g_tracker.counters.deleted_unseen, 1);
+    /* the person is seen again where they were, at their height, within recover_s of the deletion:
+     * the same person (identity recovery); tests/test_multi.c has the cases that are not */
     for (int i = 0; i < 3; i++, t += 40000) {
         frame_of(cams, 5, x, t, &rng, 1.0);
         mvt_tracker_step(&g_tracker, &g_frame, &g_out);
     }
     assert_int_equal(g_out.num_tracks, 1);
-    assert_true(g_out.tracks[0].id > id);
+    assert_int_equal(g_out.tracks[0].id, id);
+    assert_int_equal(g_out.tracks[0].status, MVT_TRACK_CONFIRMED);
+    assert_int_equal(g_tracker.counters.identities_recovered, 1);
 }
 
 /* A saved tracker restored into a fresh one continues bit for bit; a state with one bad value is
@@ -387,11 +391,26 @@ static void test_mvt_tracker_resume_continues_and_refuses_bad_state(void **state
     /* one bad value anywhere: refused, the tracker unchanged */
     int live = 0;
     while (g_saved.tracks[live].id == 0) live++;
-    for (int c = 0; c < 8; c++) {
+    const mvt_lost_t kept = {.id = 1000, .lost_us = g_saved.last_utime_us - 200000,
+                             .until_us = g_saved.last_utime_us + 2000000, .x = {3, 2, 1.7f},
+                             .P = {0.01f, 0, 0, 0, 0.01f, 0, 0, 0, 0.001f}};
+    for (int c = 0; c < 14; c++) {
         mvt_tracker_save(&g_tracker2, &g_saved);
         g_bad = g_saved;
         mvt_track_t *tr = &g_bad.tracks[live];
+        if (c >= 8) {
+            g_bad.lost[3] = kept; /* a lost identity kept for recovery, valid on its own ... */
+            g_bad.next_id = 1001;
+            g_saved = g_bad;
+            assert_int_equal(mvt_tracker_resume(&g_tracker2, &g_saved, 0), MVT_OK);
+        }
         switch (c) {
+        case 8: g_bad.lost[3].x[2] = NAN; break;                 /* ... but not with a NaN, */
+        case 9: g_bad.lost[3].id = tr->id; break;                /* a live track's identity, */
+        case 10: g_bad.lost[3].P[8] = -1.0f; break;              /* a negative variance, */
+        case 11: g_bad.lost[3].lost_us = g_bad.last_utime_us + 1; break; /* a loss after the clock, */
+        case 12: tr->held = kept; break;                         /* held by a track of another id, */
+        case 13: tr->seen_zz = NAN; break;                       /* nor a track's last-seen height */
         case 0: tr->s.x[1] = NAN; break;
         case 1: tr->s.P[7] = -1.0f; break;                       /* variance of y negative */
         case 2: tr->s.P[1] = 5.0f; break;                        /* not symmetric */

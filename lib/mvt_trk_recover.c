@@ -1,0 +1,114 @@
+/*
+ * mvt_trk_recover.c - identity recovery (mvt_trk.h): a person whose track was deleted while they
+ * were still in the room, and who is born again soon after within walking reach, at the same head
+ * height, keeps their identity.
+ *
+ * Why. A track is deleted on evidence that can be wrong for a moment: no camera placed it for
+ * coast_max_s (a segmentation that lost a person standing still), it was hidden for
+ * occluded_max_s, or views showed its place empty for contra_max_s (its estimate drifted off a
+ * hidden person). The person is then born again a few frames later under a new identity: an identity
+ * switch that no association can prevent, because the old track no longer exists. Tracks that
+ * left (through a side wall, out of the volume), tracks too uncertain to have a place, and
+ * duplicates (the same person as a surviving track) are not kept: their person is gone, nowhere in
+ * particular, or still tracked.
+ *
+ * The test. A record keeps the deleted track's horizontal position x_l as the motion models
+ * predicted it at the deletion, with its covariance P_l, and the head height (and its variance) of
+ * the last frame the track was seen: while a track coasts, its height spreads with the models'
+ * vertical noise, and the cue that tells two people apart would be lost. A birth at x_b
+ * with covariance P_b, dt seconds later, is the same person when
+ *     d^2 = (x_b - x_l)^T (P_l + P_b + W)^-1 (x_b - x_l) <= MVT_TRK_GATE3 (chi-square 3 dof, 99.9 %),
+ * W = diag(v^2 dt^2, v^2 dt^2, h^2): the person walked at up to v = init_vel_std_ms in any
+ * direction meanwhile (the prior of a new track's speed), and a head's height stays within
+ * h = MVT_TRK_HEAD_SD_M. Of several records in reach, the nearest in d^2 wins. The height is what
+ * tells two people apart after a gap (re-acquisition uses the same cue).
+ *
+ * The identity goes to the birth at once (a track's identity never changes during its life) and
+ * the record travels with the tentative track: if that track dies tentative (a ghost, not the
+ * person) the record goes back to the store with its own deadline. Records are kept recover_s
+ * after the deletion; when MVT_MAX_LOST are kept, the one nearest its deadline gives way.
+ */
+#include <string.h>
+
+#include "mvt_trk.h"
+
+/* The slot for a new record: a free or expired one, else the one nearest its deadline. */
+static mvt_lost_t *free_record(mvt_tracker_t *self, int64_t now_us)
+{
+    mvt_lost_t *best = &self->lost[0];
+    for (int i = 0; i < MVT_MAX_LOST; i++) {
+        mvt_lost_t *r = &self->lost[i];
+        if (r->id == 0 || r->until_us < now_us) {
+            return r;
+        }
+        if (r->until_us < best->until_us) {
+            best = r;
+        }
+    }
+    return best;
+}
+
+void mvt_trk_lose(mvt_tracker_t *self, const mvt_track_t *tr, int64_t now_us)
+{
+    const mvt_real keep_s = self->cfg.recover_s;
+    if (!(keep_s > MVT_R(0.0)) || tr->id == 0) {
+        return;
+    }
+    mvt_lost_t *r = free_record(self, now_us);
+    memset(r, 0, sizeof(*r));
+    r->id = tr->id;
+    r->lost_us = now_us;
+    r->until_us = now_us + (int64_t)(keep_s * MVT_R(1e6));
+    for (int i = 0; i < 2; i++) {
+        r->x[i] = tr->s.x[i];
+        for (int j = 0; j < 2; j++) {
+            r->P[i * 3 + j] = tr->s.P[i * 6 + j];
+        }
+    }
+    r->x[2] = tr->seen_z;
+    r->P[8] = tr->seen_zz;
+}
+
+void mvt_trk_give_back(mvt_tracker_t *self, mvt_track_t *tr, int64_t now_us)
+{
+    if (tr->held.id == 0 || tr->held.id != tr->id) {
+        return;
+    }
+    if (tr->held.until_us >= now_us) {
+        *free_record(self, now_us) = tr->held;
+    }
+    memset(&tr->held, 0, sizeof(tr->held));
+}
+
+int32_t mvt_trk_recover(mvt_tracker_t *self, const mvt_real x[3], const mvt_real cov[9], int64_t now_us,
+                        mvt_lost_t *held)
+{
+    const mvt_real v = self->cfg.init_vel_std_ms;
+    int best = -1;
+    mvt_real best_d2 = MVT_TRK_GATE3;
+    for (int i = 0; i < MVT_MAX_LOST; i++) {
+        const mvt_lost_t *r = &self->lost[i];
+        if (r->id == 0 || r->until_us < now_us) {
+            continue;
+        }
+        const mvt_real dt = mvt_us_to_s(now_us - r->lost_us);
+        mvt_real W[9] = {0};
+        W[0] = W[4] = v * v * dt * dt;
+        W[8] = MVT_TRK_HEAD_SD_M * MVT_TRK_HEAD_SD_M;
+        mvt_real P[9];
+        for (int k = 0; k < 9; k++) {
+            P[k] = r->P[k] + W[k];
+        }
+        const mvt_real d2 = mvt_trk_mahalanobis3(r->x, P, x, cov);
+        if (d2 >= MVT_R(0.0) && d2 <= best_d2) {
+            best_d2 = d2;
+            best = i;
+        }
+    }
+    if (best < 0) {
+        return 0;
+    }
+    *held = self->lost[best];
+    memset(&self->lost[best], 0, sizeof(self->lost[best]));
+    return held->id;
+}
