@@ -267,6 +267,8 @@ typedef struct mvt_track {
     int64_t last_update_us;     /* last frame seen */
     int64_t last_explained_us;  /* last frame seen, or seen and hidden in enough views */
     int64_t last_consistent_us; /* last frame seen, or contradicted by fewer than contra_views */
+    mvt_real exist_llr;         /* tentative: log-likelihood ratio, person against clutter, of the
+                                   detections in its gates since its birth frame (mvt_trk_delete) */
     mvt_real seen_z, seen_zz;   /* head height and its variance the last frame seen: a coasting
                                    track's height spreads with the motion models' vertical noise,
                                    a person's does not (identity recovery compares this) */
@@ -332,6 +334,7 @@ typedef struct mvt_tracker {
     uint8_t ev_boxes[MVT_MAX_CAMERAS];     /* the view sends boxes */
     mvt_real ev_support[MVT_MAX_CAMERAS];  /* log-likelihood ratio of a detection at the place */
     mvt_real ev_empty;                     /* ... of the place in no blob, ln(1 - p_detect) < 0 */
+    mvt_real ev_llr[MVT_MAX_TARGETS];      /* this frame's existence evidence of tentative tracks */
 } mvt_tracker_t;
 
 /* Fills cfg with the documented defaults (volume: a 10 m cube around the origin, z >= 0). */

@@ -25,6 +25,12 @@ static inline int mvt_trk_popcount(uint32_t x)
 /* chi-square, 3 degrees of freedom, 99.9 %: the gate of both */
 #define MVT_TRK_GATE3 MVT_R(16.27)
 
+/* A tentative track is confirmed only when its detections since birth are this much likelier
+ * (log) from a person than from clutter, and deleted when they are this much likelier from clutter:
+ * ln(99), a sequential test with 1 % error either way. In ordinary clutter a person's first frame
+ * after the birth passes it; in a flood of false alarms a ghost's random detections do not. */
+#define MVT_TRK_EXIST_LLR MVT_R(4.595)
+
 /* Mahalanobis distance squared of b from a, covariance Pa + Pb (3x3 each); < 0 if singular. */
 mvt_real mvt_trk_mahalanobis3(const mvt_real a[3], const mvt_real Pa[9], const mvt_real b[3], const mvt_real Pb[9]);
 

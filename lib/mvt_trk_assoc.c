@@ -145,8 +145,17 @@ static void hypothesise(mvt_tracker_t *self, int k, const int live[], int n_live
             self->merge_cov[t][2] = dy * dy * third;
         }
     }
+    /* clutter density of this view (detections per pixel^2; every detection counted as possible
+     * clutter, at least one) for the tentative tracks' existence evidence */
+    int n_ok = 0;
+    for (int d = 0; d < nd; d++) {
+        n_ok += self->meas_ok[k][d];
+    }
+    const mvt_real clutter = (mvt_real)(n_ok > 1 ? n_ok : 1) / ((mvt_real)cam->width * (mvt_real)cam->height);
     for (int i = 0; i < n_live; i++) {
         const int t = live[i];
+        const int tentative = self->tracks[t].status == MVT_TRACK_TENTATIVE;
+        mvt_real g = MVT_R(0.0); /* sum of the gated detections' Gaussian densities, 1/px^2 */
         int any = 0;
         for (int d = 0; d < nd; d++) {
             mvt_real cost = MVT_R(-1.0);
@@ -164,6 +173,10 @@ static void hypothesise(mvt_tracker_t *self, int k, const int live[], int n_live
                         }
                     } else if (in.d2 <= c->gate_chi2) {
                         cost = in.d2;
+                        const mvt_real det = in.S[0] * in.S[2] - in.S[1] * in.S[1];
+                        if (tentative && det > MVT_R(0.0)) {
+                            g += MVT_EXP(MVT_R(-0.5) * in.d2) / (MVT_R(6.2831853) * MVT_SQRT(det));
+                        }
                     }
                 }
             }
@@ -172,6 +185,14 @@ static void hypothesise(mvt_tracker_t *self, int k, const int live[], int n_live
         }
         if (self->pred_ok[t] && nd > 0 && !any) {
             self->counters.gated_out++;
+        }
+        if (tentative && self->pred_ok[t]) {
+            /* the likelihood ratio of the view's gated detections, a person there (detected with
+             * p_detect at the Gaussian's place, or missed) against clutter spread uniformly at
+             * this view's density (the integrated PDA's existence update): on average 1 for a
+             * flood's random detections, far more for a person's; 1 - p_detect for an empty gate */
+            const mvt_real pd = c->p_detect;
+            self->ev_llr[t] += MVT_LOG(MVT_R(1.0) - pd + pd * g / clutter);
         }
     }
     if (!self->reacq_any) {

@@ -176,9 +176,14 @@ def test_daemon_false_alarm_flood_counted_tracks_kept(tmp_path, daemon_path):
     tr = read_log(str(out), lambda c: c in ("TRACKS", "MVTRACK_STATUS"))
     sc = read_log(str(log), lambda c: c == "GROUND_TRUTH")
     res = clear_mot(pair_frames(sc, tr, rig.frame_rate))
-    # the two people keep their identities through the flood; (the flood's random agreements do
-    # confirm ghost tracks: a known limit, README)
+    # the two people keep their identities through the flood
     assert res.id_switches == 0 and res.misses <= 10, res
+    # a tentative track is confirmed only when its detections are 99 times likelier from a person
+    # than from the view's clutter (mvt_trk_delete, the existence test): the flood's random
+    # agreements confirmed 56 ghost tracks (2,006 false-positive frames) without it, 4 (213) with
+    # it; a lucky three-view coincidence still passes now and then (README, known limits)
+    ghosts = {t.id for v in tr.tracks.values() for t in v if t.status in (2, 3)} - {1, 2}
+    assert len(ghosts) <= 10 and res.false_positives <= 600, (ghosts, res)
     assert max(len(v) for v in tr.tracks.values()) <= 32
     st = tr.status[-1]
     assert st.rejected_over_capacity >= 100 * 5 * (302 - 64) * 0.99
