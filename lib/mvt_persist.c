@@ -148,7 +148,7 @@ static int tracker_state_ok(const mvt_tracker_config_t *c, const mvt_tracker_per
         if (tr->id < 0 || !p->have_time || !status_ok(tr->status) || !estimate_ok(c, &tr->s, now) ||
             !time_ok(tr->last_update_us, now) || !time_ok(tr->last_explained_us, now) ||
             !time_ok(tr->last_consistent_us, now) || tr->misses < 0 || !bank_ok(c, tr) ||
-            !lost_ok(c, &tr->held, now) || !(tr->seen_z >= c->volume_min[2] - MVT_PERSIST_SLACK_M && tr->seen_z <= c->volume_max[2] + MVT_PERSIST_SLACK_M) ||
+            !lost_ok(c, &tr->held, now) || !isfinite(tr->exist_llr) || !(tr->seen_z >= c->volume_min[2] - MVT_PERSIST_SLACK_M && tr->seen_z <= c->volume_max[2] + MVT_PERSIST_SLACK_M) ||
             !(tr->seen_zz >= MVT_R(0.0) && tr->seen_zz <= MVT_PERSIST_MAX_VAR) ||
             (tr->held.id != 0 && (tr->held.id != tr->id || tr->status != MVT_TRACK_TENTATIVE))) {
             return 0;
