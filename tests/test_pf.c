@@ -562,6 +562,19 @@ static void test_pft_lost_person_recovers_identity_from_blob_track(void **state)
     assert_true(after != before && after > 0);
 }
 
+
+/* A head-top detection of the head at h in camera k's view (no colour, no box), if it projects. */
+static void add_head(mvt_view_t *v, int k, const double h[3])
+{
+    const mvt_real hp[3] = {(mvt_real)h[0], (mvt_real)h[1], (mvt_real)h[2]};
+    mvt_real uv[2];
+    if (mvt_cam_project(&g_cams[k], hp, uv, NULL) == MVT_OK) {
+        mvt_detection_t *d = &v->det[v->num_detections++];
+        memset(d, 0, sizeof(*d));
+        d->u = uv[0]; d->v = uv[1]; d->sigma_px = 3; d->score = 1; d->hue = d->saturation = -1;
+    }
+}
+
 /* B stands still; A walks up to 0.64 m beside B and vanishes (masks and detections gone: they
  * left through a door there). Returns B's identity at frame 60 and at the end, the number of
  * targets at the end, and the frames after A left in which a confirmed target other than B's
@@ -587,14 +600,7 @@ static void run_leave_beside(int share, int32_t *b_before, int32_t *b_after, int
             paint(k, b, 200);
             if (a_here) paint(k, a, 200); /* the same colour: only geometry tells them apart */
             for (int p = 0; p < 1 + a_here; p++) {
-                const double *h = p == 0 ? b : a;
-                const mvt_real hp[3] = {(mvt_real)h[0], (mvt_real)h[1], (mvt_real)h[2]};
-                mvt_real uv[2];
-                if (mvt_cam_project(&g_cams[k], hp, uv, NULL) == MVT_OK) {
-                    mvt_detection_t *d = &v->det[v->num_detections++];
-                    memset(d, 0, sizeof(*d));
-                    d->u = uv[0]; d->v = uv[1]; d->sigma_px = 3; d->score = 1; d->hue = d->saturation = -1;
-                }
+                add_head(v, k, p == 0 ? b : a);
             }
         }
         assert_int_equal(mvt_pft_step(&g_pft, &g_frame, &g_out), MVT_OK);
@@ -657,15 +663,8 @@ static int run_ghost_column(int share)
             paint(k, b, 60);
             paint(k, c, 160);
             for (int p = 0; p < 3; p++) {
-                const double *h = p == 0 ? b : (p == 1 ? c : gh);
                 if (p == 2 && (k > 1 || f >= 40)) continue; /* the false agreement */
-                const mvt_real hp[3] = {(mvt_real)h[0], (mvt_real)h[1], (mvt_real)h[2]};
-                mvt_real uv[2];
-                if (mvt_cam_project(&g_cams[k], hp, uv, NULL) == MVT_OK) {
-                    mvt_detection_t *d = &v->det[v->num_detections++];
-                    memset(d, 0, sizeof(*d));
-                    d->u = uv[0]; d->v = uv[1]; d->sigma_px = 3; d->score = 1; d->hue = d->saturation = -1;
-                }
+                add_head(v, k, p == 0 ? b : (p == 1 ? c : gh));
             }
         }
         assert_int_equal(mvt_pft_step(&g_pft, &g_frame, &g_out), MVT_OK);
