@@ -4,10 +4,11 @@ Each scene is rendered (tools/mvtrack_tools/render.py: coloured bodies, fragment
 furniture, shadows, clutter; blobs derived from the masks) and run through the daemon as:
 
   pkf            the projective Kalman filter on the blobs (reference)
-  MS (paper)     --mode pf-ms --particle-model point --exclusion 0: independent motion-only filters
-                 whose particles are points of the body, as published
-  MS+C (paper)   --mode pf --particle-model point --exclusion 0: with the hue/saturation cue
-  MS+C point     --mode pf --particle-model point: the paper's particles with the exclusion prior
+  MS (paper)     --mode pf-ms --particle-model point --exclusion 0 --pixels independent: independent
+                 motion-only filters whose particles are points of the body, as published
+  MS+C (paper)   the same with --mode pf: with the hue/saturation cue
+  MS+C point     --mode pf --particle-model point: the paper's particles with the exclusion prior and
+                 the pixels shared out between targets
   MS             --mode pf-ms: column particles (head-top hypotheses), exclusion prior
   MS+C           --mode pf: the daemon's default particle filter (column, colour, exclusion)
 
@@ -39,8 +40,9 @@ from .render import Renderer, write_rendered
 from .rig import smartroom
 
 Q = np.array([0.5, 0.5, 0.05])
-RUNS = [("pkf", "pkf", []), ("pkf (occlusion off)", "pkf", ["--occlusion", "off", "--exclusion", "0"]), ("MS (paper)", "pf-ms", ["--particle-model", "point", "--exclusion", "0"]),
-        ("MS+C (paper)", "pf", ["--particle-model", "point", "--exclusion", "0"]),
+PAPER = ["--particle-model", "point", "--exclusion", "0", "--pixels", "independent"]
+RUNS = [("pkf", "pkf", []), ("pkf (occlusion off)", "pkf", ["--occlusion", "off", "--exclusion", "0"]),
+        ("MS (paper)", "pf-ms", PAPER), ("MS+C (paper)", "pf", PAPER),
         ("MS+C point", "pf", ["--particle-model", "point"]), ("MS", "pf-ms", []), ("MS+C", "pf", [])]
 
 
