@@ -88,7 +88,7 @@ def prepare(out: Path, rig_seed: int, cameras: int, kind: str, seed: int, second
     return rig, rig_path, truth, info
 
 
-def detect(rig: Rig, d: Path, det: Path, lead: int, extra: list[str], progress: bool, fresh: bool) -> float:
+def detect(rig: Rig, d: Path, det: Path, lead: int, extra: list[str], progress: bool, fresh: bool = False) -> float:
     """mvtrack-detect over every camera's video; video frame i is stamped as scene frame i - lead.
 
     The detections are reused when the same detector binary already ran with the same arguments on
@@ -100,9 +100,10 @@ def detect(rig: Rig, d: Path, det: Path, lead: int, extra: list[str], progress: 
     for c in rig.cameras:
         args += ["--video", f"{c.name}={d / (c.name + '.avi')}"]
     stamp = d / "detections.json"
+    videos = d / "done.json"  # the videos' stamp (prepare); without it, never reuse
     key = {"detector_sha": hashlib.sha1(DETECT.read_bytes()).hexdigest(), "args": args + extra,
-           "videos": (d / "done.json").read_text()}
-    if not fresh and det.exists() and stamp.exists():
+           "videos": videos.read_text() if videos.exists() else None}
+    if not fresh and key["videos"] is not None and det.exists() and stamp.exists():
         old = json.loads(stamp.read_text())
         if old.get("key") == key:
             return float(old["detect_s"])
