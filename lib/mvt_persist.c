@@ -167,7 +167,7 @@ static int tracker_state_ok(const mvt_tracker_config_t *c, const mvt_tracker_per
 }
 
 /* An outage does not use up a kept identity's time (until), but the person walked meanwhile: the
- * reach still counts from the deletion (lost_us). */
+ * reach still counts from the last frame seen (lost_us). */
 static void shift_lost_clocks(mvt_lost_t *r, int64_t by_us)
 {
     if (r->id != 0) {

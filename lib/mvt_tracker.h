@@ -237,7 +237,7 @@ typedef struct mvt_counters {
 typedef struct mvt_lost {
     int32_t id;                 /* 0: free */
     int32_t reserved;           /* zero */
-    int64_t lost_us;            /* when its track was deleted */
+    int64_t lost_us;            /* the last frame its track was seen (the reach counts from it) */
     int64_t until_us;           /* kept until then */
     mvt_real x[3];              /* position when deleted (x, y as predicted then; z the height the
                                    last frame the track was seen) */

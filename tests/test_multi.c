@@ -387,15 +387,18 @@ static void test_mvt_tracker_step_person_returns_new_identity(void **state)
 }
 
 /* Identity recovery. A person whose track is deleted while they are still in the room (here: the
- * detector loses them for 2.4 s) and who is born again soon after, within walking reach and at
- * their head height, keeps their identity; someone of another height at the same place, someone
- * out of walking reach, or anyone after recover_s does not. Returns the identity of the person
- * born at `back` after the person at X was lost; *was receives the lost identity. */
+ * detector loses them for gap_s, and a track unseen for coast_s is deleted) and who is born again
+ * soon after, within walking reach and at their head height, keeps their identity; someone of
+ * another height at the same place, someone out of walking reach, or anyone after recover_s does
+ * not. Returns the identity of the person born at `back` after the person at X was lost; *was
+ * receives the lost identity. */
 static int32_t g_new; /* lost_and_born's result (C leaves the order of `f(&x) > x` open) */
-static int32_t lost_and_born(const mvt_real back[3], double gap_s, mvt_real recover_s, int32_t *was)
+static int32_t lost_and_born(const mvt_real back[3], double gap_s, mvt_real coast_s, mvt_real recover_s,
+                             int32_t *was)
 {
     init();
     g_tracker.cfg.recover_s = recover_s;
+    g_tracker.cfg.coast_max_s = coast_s;
     test_rng_t rng = {23};
     const mvt_real X[1][3] = {{3.0f, 2.5f, 1.75f}};
     int64_t t = 1000000;
@@ -431,21 +434,23 @@ static void test_mvt_tracker_step_person_lost_and_back_keeps_identity(void **sta
     int32_t was = 0;
     /* back 0.3 m away at the same height, 2.4 s after the last detection (0.4 s after deletion) */
     const mvt_real near_same[3] = {3.2f, 2.7f, 1.76f};
-    const int32_t back = lost_and_born(near_same, 2.4, 3.0f, &was);
+    const int32_t back = lost_and_born(near_same, 2.4, 2.0f, 3.0f, &was);
     assert_int_equal(back, was);
     assert_int_equal(g_tracker.counters.identities_recovered, 1);
     assert_true(g_tracker.counters.deleted_unseen == 1);
     /* the same with recovery off: a new identity */
-    assert_true(lost_and_born(near_same, 2.4, 0.0f, &was) > 0 && g_new > was);
+    assert_true(lost_and_born(near_same, 2.4, 2.0f, 0.0f, &was) > 0 && g_new > was);
     /* 0.3 m shorter at the same place: another person */
     const mvt_real shorter[3] = {3.1f, 2.6f, 1.45f};
-    assert_true(lost_and_born(shorter, 2.4, 3.0f, &was) > 0 && g_new > was);
+    assert_true(lost_and_born(shorter, 2.4, 2.0f, 3.0f, &was) > 0 && g_new > was);
     assert_int_equal(g_tracker.counters.identities_recovered, 0);
-    /* 3 m away 0.4 s after the deletion: out of walking reach */
+    /* 2.8 m away 0.4 s after the person was last seen (deleted after 0.2 s unseen): out of walking
+     * reach (2.4 s later the same place is within it) */
     const mvt_real far[3] = {5.0f, 0.6f, 1.75f};
-    assert_true(lost_and_born(far, 2.4, 3.0f, &was) > 0 && g_new > was);
+    assert_true(lost_and_born(far, 0.4, 0.2f, 3.0f, &was) > 0 && g_new > was);
+    assert_int_equal(lost_and_born(near_same, 0.4, 0.2f, 3.0f, &was), was);
     /* after recover_s: let go */
-    assert_true(lost_and_born(near_same, 5.6, 3.0f, &was) > 0 && g_new > was);
+    assert_true(lost_and_born(near_same, 5.6, 2.0f, 3.0f, &was) > 0 && g_new > was);
 }
 
 /* A short person walks into the middle of a group of three tall ones, stands there 3 s (hidden in
