@@ -184,6 +184,20 @@ static int option_pos(const char *opt_name, const char *arg, double *out)
     return 0;
 }
 
+/* Parses a number option in [lo, hi] (unit: what it measures, for the message); prints why not and
+ * returns -1 on failure. */
+static int option_range(const char *opt_name, const char *arg, double lo, double hi, const char *unit, double *out)
+{
+    char *end = NULL;
+    const double v = strtod(arg, &end);
+    if (end == arg || *end != '\0' || !(v >= lo) || !(v <= hi)) {
+        fprintf(stderr, "mvtrackd: %s needs %s in [%g, %g], got '%s'\n", opt_name, unit, lo, hi, arg);
+        return -1;
+    }
+    *out = v;
+    return 0;
+}
+
 /* Parses an integer option in [lo, hi]; prints why not and returns -1 on failure. */
 static int option_int(const char *opt_name, const char *arg, long lo, long hi, long *out)
 {
@@ -292,24 +306,16 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
                 return 2;
             }
             break;
-        case 'X': {
-            char *end = NULL;
-            exclusion_m = strtod(optarg, &end);
-            if (end == optarg || *end != '\0' || !(exclusion_m >= 0.0) || exclusion_m > 10.0) {
-                fprintf(stderr, "mvtrackd: --exclusion needs metres in [0, 10], got '%s'\n", optarg);
+        case 'X':
+            if (option_range("--exclusion", optarg, 0.0, 10.0, "metres", &exclusion_m) != 0) {
                 return 2;
             }
             break;
-        }
-        case 'R': {
-            char *end = NULL;
-            recover_s = strtod(optarg, &end);
-            if (end == optarg || *end != '\0' || !(recover_s >= 0.0) || recover_s > 3600.0) {
-                fprintf(stderr, "mvtrackd: --recover needs seconds in [0, 3600], got '%s'\n", optarg);
+        case 'R':
+            if (option_range("--recover", optarg, 0.0, 3600.0, "seconds", &recover_s) != 0) {
                 return 2;
             }
             break;
-        }
         case 'v': d->verbose = 1; break;
         case 'h': usage(stdout); return 0;
         default: usage(stderr); return 2;

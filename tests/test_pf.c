@@ -226,6 +226,21 @@ static double ref_colour(const mvt_pf_tables_t *tab, int k, int idx, double h, d
     return tab->log_h[dh] + tab->log_s[abs(g_wmask[k].sat[idx] - sq)];
 }
 
+/* g_pool: 300 particles spread over the room and beyond it (some outside a view's image), random
+ * colours, zero weights. */
+static void scatter_pool(test_rng_t *r)
+{
+    g_pool.n = 300;
+    for (int i = 0; i < g_pool.n; i++) {
+        g_pool.x[i] = (mvt_real)(-0.5 + 7 * test_uniform(r));
+        g_pool.y[i] = (mvt_real)(-0.5 + 6 * test_uniform(r));
+        g_pool.z[i] = (mvt_real)(0.9 + 1.2 * test_uniform(r));
+        g_pool.h[i] = (mvt_real)test_uniform(r);
+        g_pool.s[i] = (mvt_real)test_uniform(r);
+        g_pool.w[i] = 0;
+    }
+}
+
 static void test_weight_point_and_column_match_projection(void **state)
 {
     (void)state;
@@ -250,15 +265,7 @@ static void test_weight_point_and_column_match_projection(void **state)
     g_wimg[3].width = 0; /* a camera without a mask this frame: skipped */
     const mvt_pf_body_t body = {0.06f, 0.06f, 0.7f, 0.3f, 0.9f, 0.0f, 0.0f}; /* no face, no clear column: see the claims test */
     for (int column = 0; column <= 1; column++) {
-        g_pool.n = 300;
-        for (int i = 0; i < g_pool.n; i++) { /* inside the room, some outside a view's image */
-            g_pool.x[i] = (mvt_real)(-0.5 + 7 * test_uniform(&r));
-            g_pool.y[i] = (mvt_real)(-0.5 + 6 * test_uniform(&r));
-            g_pool.z[i] = (mvt_real)(0.9 + 1.2 * test_uniform(&r));
-            g_pool.h[i] = (mvt_real)test_uniform(&r);
-            g_pool.s[i] = (mvt_real)test_uniform(&r);
-            g_pool.w[i] = 0;
-        }
+        scatter_pool(&r);
         mvt_real on_fg[5];
         mvt_pf_weight(&g_pool, g_wcams, fovs, g_wimg, 5, &tab, 1, column ? &body : NULL, 0.5f, NULL, on_fg, NULL);
         int off = 0, n_fg[5] = {0};
@@ -324,15 +331,7 @@ static void test_weight_claimed_pixels_are_no_evidence(void **state)
     const mvt_pf_body_t body = {0.06f, 0.06f, 0.7f, 0.3f, 0.9f, 0.16f, 0.9f};
     const int fg_level = (tab.d_floor + 255) / 2;
     int claimed_points = 0, farther_colour = 0;
-    g_pool.n = 300;
-    for (int i = 0; i < g_pool.n; i++) {
-        g_pool.x[i] = (mvt_real)(-0.5 + 7 * test_uniform(&r));
-        g_pool.y[i] = (mvt_real)(-0.5 + 6 * test_uniform(&r));
-        g_pool.z[i] = (mvt_real)(0.9 + 1.2 * test_uniform(&r));
-        g_pool.h[i] = (mvt_real)test_uniform(&r);
-        g_pool.s[i] = (mvt_real)test_uniform(&r);
-        g_pool.w[i] = 0;
-    }
+    scatter_pool(&r);
     mvt_real on_fg[5], hidden[5];
     mvt_pf_weight(&g_pool, g_wcams, g_wfov, g_wimg, 5, &tab, 1, &body, 0.5f, g_claims, on_fg, hidden);
     int off = 0, n_fg[5] = {0}, n_hid[5] = {0};
@@ -513,18 +512,26 @@ static void test_pft_two_people_tracked_and_reproducible(void **state)
     assert_memory_equal(&a, &b, sizeof(a)); /* same seed, same output, bit for bit */
 }
 
+/* g_pft in the 6 x 5 x 2.5 m test room: particles per target, pixels shared or not, identity
+ * recovery time. */
+static void init_room_pft(int particles, int share, mvt_real recover_s)
+{
+    mvt_pft_config_t cfg;
+    mvt_pft_config_default(&cfg);
+    cfg.num_particles = particles;
+    cfg.share_pixels = share;
+    cfg.recover_s = recover_s;
+    for (int i = 0; i < 3; i++) cfg.det.volume_min[i] = 0;
+    cfg.det.volume_max[0] = 6; cfg.det.volume_max[1] = 5; cfg.det.volume_max[2] = 2.5;
+    assert_int_equal(mvt_pft_init(&g_pft, &cfg, g_cams, 5), MVT_OK);
+}
+
 /* One person walking; their masks go blank for frames 60..99 (the filter loses them) while the
  * detector's blobs continue (the blob tracker keeps them). Returns the identity reported at frame
  * 59 and at the last frame. */
 static void run_lost_person(mvt_real recover_s, int32_t *before, int32_t *after)
 {
-    mvt_pft_config_t cfg;
-    mvt_pft_config_default(&cfg);
-    cfg.num_particles = 300;
-    cfg.recover_s = recover_s;
-    for (int i = 0; i < 3; i++) cfg.det.volume_min[i] = 0;
-    cfg.det.volume_max[0] = 6; cfg.det.volume_max[1] = 5; cfg.det.volume_max[2] = 2.5;
-    assert_int_equal(mvt_pft_init(&g_pft, &cfg, g_cams, 5), MVT_OK);
+    init_room_pft(300, 1, recover_s);
     *before = *after = 0;
     for (int f = 0; f < 150; f++) {
         const double head[3] = {2.0 + 0.015 * f, 2.4, 1.75};
@@ -581,13 +588,7 @@ static void add_head(mvt_view_t *v, int k, const double h[3])
  * (the one nearest to B, within 0.3 m) was reported. */
 static void run_leave_beside(int share, int32_t *b_before, int32_t *b_after, int *num_end, int *linger)
 {
-    mvt_pft_config_t cfg;
-    mvt_pft_config_default(&cfg);
-    cfg.num_particles = 400;
-    cfg.share_pixels = share;
-    for (int i = 0; i < 3; i++) cfg.det.volume_min[i] = 0;
-    cfg.det.volume_max[0] = 6; cfg.det.volume_max[1] = 5; cfg.det.volume_max[2] = 2.5;
-    assert_int_equal(mvt_pft_init(&g_pft, &cfg, g_cams, 5), MVT_OK);
+    init_room_pft(400, share, MVT_R(3.0));
     const double b[3] = {3.0, 2.5, 1.80};
     *b_before = *b_after = 0;
     *linger = 0;
@@ -644,13 +645,7 @@ static void test_pft_person_leaving_beside_another_does_not_take_them(void **sta
  * (of 200) in which a confirmed target more than 0.3 m from B and C was reported. */
 static int run_ghost_column(int share)
 {
-    mvt_pft_config_t cfg;
-    mvt_pft_config_default(&cfg);
-    cfg.num_particles = 400;
-    cfg.share_pixels = share;
-    for (int i = 0; i < 3; i++) cfg.det.volume_min[i] = 0;
-    cfg.det.volume_max[0] = 6; cfg.det.volume_max[1] = 5; cfg.det.volume_max[2] = 2.5;
-    assert_int_equal(mvt_pft_init(&g_pft, &cfg, g_cams, 5), MVT_OK);
+    init_room_pft(400, share, MVT_R(3.0));
     const double gh[3] = {3.0, 1.8, 1.70};
     /* behind G on the rays from cameras 0 (0.15, 0.15) and 1 (5.85, 0.15), 1.15 m farther */
     const double b[3] = {0.15 + 1.35 * (3.0 - 0.15), 0.15 + 1.35 * (1.8 - 0.15), 1.80};
