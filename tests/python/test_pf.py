@@ -149,7 +149,8 @@ def test_pf_hostile_masks_counted_never_fatal(daemon_path, tmp_path):
 def test_pf_cli_rejects_bad_options(daemon_path, tmp_path):
     smartroom().write(tmp_path / "rig.yaml")
     for args in (["--particles", "5"], ["--particles", "x"], ["--exclusion", "-1"], ["--seed", "-3"],
-                 ["--publish-particles", "999999"], ["--particle-model", "blob"]):
+                 ["--publish-particles", "999999"], ["--particle-model", "blob"], ["--recover", "-1"],
+                 ["--recover", "1e9"], ["--recover", "3s"], ["--exclusion", "nan"]):
         r = subprocess.run([str(daemon_path), "--rig", str(tmp_path / "rig.yaml"), "--mode", "pf", *args],
                            capture_output=True, text=True, timeout=30)
         assert r.returncode == 2 and "mvtrackd:" in r.stderr, args
