@@ -14,7 +14,8 @@
  *                uncertainty or leaving the volume
  *   initiate     mvt_trk_init.c: unassigned detections that agree in >= birth_min_views views
  * The caller owns the mvt_tracker_t (sizeof(mvt_tracker_t) bytes); nothing is allocated, nothing
- * is printed. Identities count up from 1 and are never reused (they wrap only after 2^31 births).
+ * is printed. Identities count up from 1 and are never given to another person (they wrap only
+ * after 2^31 births); a person deleted moments before and born again keeps theirs (recover_s).
  *
  * Filters (mvt_tracker_config_t.filter):
  *   MVT_FILTER_PROJECTIVE   each camera's pixels update the 3D state directly (PKF family;
