@@ -131,6 +131,13 @@ static int lost_ok(const mvt_tracker_config_t *c, const mvt_lost_t *r, int64_t n
            r->P[8] <= MVT_PERSIST_MAX_VAR;
 }
 
+/* The head height of the last frame seen: in the volume widened like positions, a variance. */
+static int seen_height_ok(const mvt_tracker_config_t *c, const mvt_track_t *tr)
+{
+    return tr->seen_z >= c->volume_min[2] - MVT_PERSIST_SLACK_M && tr->seen_z <= c->volume_max[2] + MVT_PERSIST_SLACK_M &&
+           tr->seen_zz >= MVT_R(0.0) && tr->seen_zz <= MVT_PERSIST_MAX_VAR;
+}
+
 static int tracker_state_ok(const mvt_tracker_config_t *c, const mvt_tracker_persist_t *p)
 {
     if (p->next_id <= 0 || (p->have_time != 0 && p->have_time != 1) || p->last_utime_us < 0 ||
@@ -148,8 +155,7 @@ static int tracker_state_ok(const mvt_tracker_config_t *c, const mvt_tracker_per
         if (tr->id < 0 || !p->have_time || !status_ok(tr->status) || !estimate_ok(c, &tr->s, now) ||
             !time_ok(tr->last_update_us, now) || !time_ok(tr->last_explained_us, now) ||
             !time_ok(tr->last_consistent_us, now) || tr->misses < 0 || !bank_ok(c, tr) ||
-            !lost_ok(c, &tr->held, now) || !isfinite(tr->exist_llr) || !(tr->seen_z >= c->volume_min[2] - MVT_PERSIST_SLACK_M && tr->seen_z <= c->volume_max[2] + MVT_PERSIST_SLACK_M) ||
-            !(tr->seen_zz >= MVT_R(0.0) && tr->seen_zz <= MVT_PERSIST_MAX_VAR) ||
+            !lost_ok(c, &tr->held, now) || !isfinite(tr->exist_llr) || !seen_height_ok(c, tr) ||
             (tr->held.id != 0 && (tr->held.id != tr->id || tr->status != MVT_TRACK_TENTATIVE))) {
             return 0;
         }

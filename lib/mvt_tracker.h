@@ -142,10 +142,10 @@ typedef struct mvt_tracker_config {
                                    still be in the room (unseen, hidden too long, contradicted; not
                                    one that left through a side wall or the volume, nor one too
                                    uncertain to have a place, nor a duplicate) keeps its identity
-                                   this long, and a person born
-                                   within walking reach of where it was lost (init_vel_std_ms times
-                                   the time since, plus both covariances), at its head height, takes
-                                   it back; >= 0 (0: off), default 3 */
+                                   this long, and a person born within walking reach of where it
+                                   was lost (init_vel_std_ms times the time since it last saw its
+                                   person, plus both covariances), at its head height, takes it
+                                   back (mvt_trk_recover.c); >= 0 (0: off), default 3 */
 } mvt_tracker_config_t;
 
 /* One detection as the core needs it (raw distorted pixels). */
@@ -245,7 +245,7 @@ typedef struct mvt_lost {
     mvt_real P[9];              /* its covariance (3x3, row-major; z uncorrelated) */
 } mvt_lost_t;
 
-/* Lost identities kept at once (the oldest gives way). */
+/* Lost identities kept at once (the one nearest its deadline gives way). */
 #ifndef MVT_MAX_LOST
 #define MVT_MAX_LOST 16
 #endif
