@@ -124,11 +124,14 @@ static int lost_ok(const mvt_tracker_config_t *c, const mvt_lost_t *r, int64_t n
     if (r->id == 0) {
         return 1;
     }
+    for (int i = 0; i < 3; i++) {
+        if (!(r->P[i * 4] >= MVT_R(0.0) && r->P[i * 4] <= MVT_PERSIST_MAX_VAR)) {
+            return 0;
+        }
+    }
     return r->id > 0 && r->reserved == 0 && time_ok(r->lost_us, now) && r->until_us >= r->lost_us &&
            r->until_us <= now + (INT64_C(1) << 60) && mvt_la_all_finite(r->x, 3) &&
-           mvt_la_all_finite(r->P, 9) && place_ok(c, r->x, zero) && r->P[0] >= MVT_R(0.0) && r->P[4] >= MVT_R(0.0) &&
-           r->P[8] >= MVT_R(0.0) && r->P[0] <= MVT_PERSIST_MAX_VAR && r->P[4] <= MVT_PERSIST_MAX_VAR &&
-           r->P[8] <= MVT_PERSIST_MAX_VAR;
+           mvt_la_all_finite(r->P, 9) && place_ok(c, r->x, zero);
 }
 
 /* The head height of the last frame seen: in the volume widened like positions, a variance. */

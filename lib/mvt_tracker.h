@@ -335,6 +335,8 @@ typedef struct mvt_tracker {
     uint8_t ev_boxes[MVT_MAX_CAMERAS];     /* the view sends boxes */
     mvt_real ev_support[MVT_MAX_CAMERAS];  /* log-likelihood ratio of a detection at the place */
     mvt_real ev_empty;                     /* ... of the place in no blob, ln(1 - p_detect) < 0 */
+    mvt_real ev_clutter[MVT_MAX_CAMERAS];  /* clutter density: the view's detections (every one
+                                              possibly clutter, at least one) per pixel^2 */
     mvt_real ev_llr[MVT_MAX_TARGETS];      /* this frame's existence evidence of tentative tracks */
 } mvt_tracker_t;
 
@@ -361,7 +363,8 @@ int mvt_tracker_select(const mvt_tracker_t *self, int cam, const mvt_detection_t
                        int keep[MVT_MAX_DETECTIONS]);
 
 /* What a tracker carries from one frame to the next, and nothing else: its tracks, the next
- * identity, the identities kept for recovery, its clock and its counters (the configuration and cameras come from the caller, the
+ * identity, the identities kept for recovery, its clock and its counters (the configuration and
+ * cameras come from the caller, the
  * workspaces are rebuilt every frame). Pointer-free and fixed-size, so a caller may store it as
  * bytes (a daemon's checkpoint) and give it back to a tracker built with the same configuration. */
 typedef struct mvt_tracker_persist {

@@ -35,11 +35,13 @@ static inline int mvt_trk_popcount(uint32_t x)
 mvt_real mvt_trk_mahalanobis3(const mvt_real a[3], const mvt_real Pa[9], const mvt_real b[3], const mvt_real Pb[9]);
 
 /* Identity recovery (mvt_trk_recover.c). A confirmed track deleted while its person may still be
- * in the room (unseen, hidden too long, contradicted, too uncertain) leaves its identity, position
- * and covariance for recover_s. A birth within reach of such a record (the Mahalanobis distance
+ * in the room (unseen, hidden too long, contradicted) leaves its identity, position and covariance
+ * for recover_s. A birth within reach of such a record (the Mahalanobis distance
  * of the birth's point from the record, the record's covariance grown by walking pace times the
  * time since, heights compared with MVT_TRK_HEAD_SD_M) takes the nearest record's identity; a
- * tentative track that dies gives it back. O(MVT_MAX_LOST) each. */
+ * tentative track that dies gives it back, one that is confirmed (mvt_trk_confirm, which sets the
+ * status) keeps it. O(MVT_MAX_LOST) each. */
+void mvt_trk_confirm(mvt_tracker_t *self, mvt_track_t *tr);
 void mvt_trk_lose(mvt_tracker_t *self, const mvt_track_t *tr, int64_t now_us);
 void mvt_trk_give_back(mvt_tracker_t *self, mvt_track_t *tr, int64_t now_us);
 int32_t mvt_trk_recover(mvt_tracker_t *self, const mvt_real x[3], const mvt_real cov[9], int64_t now_us,
@@ -71,7 +73,7 @@ mvt_trk_evidence_t mvt_trk_view_evidence(const mvt_tracker_t *self, const mvt_vi
 /* The slack (pixels) around a birth candidate's image point: the birth radius of camera k. */
 mvt_real mvt_trk_birth_radius_px(const mvt_tracker_t *self, int k);
 
-/* Per observed camera, this frame's evidence weights (ev_boxes, ev_support, ev_empty): a detection
+/* Per observed camera, this frame's evidence weights (ev_boxes, ev_support, ev_empty, ev_clutter): a detection
  * within the birth radius of a place weighs ln((p_detect + (1 - p_detect) q) / q) for a person
  * there, q the chance that clutter puts one there (Poisson, from the view's detection count and
  * picture area, clamped to [0.01, 0.95]); a place in no blob weighs ln(1 - p_detect) (views with

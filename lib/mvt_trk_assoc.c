@@ -145,13 +145,6 @@ static void hypothesise(mvt_tracker_t *self, int k, const int live[], int n_live
             self->merge_cov[t][2] = dy * dy * third;
         }
     }
-    /* clutter density of this view (detections per pixel^2; every detection counted as possible
-     * clutter, at least one) for the tentative tracks' existence evidence */
-    int n_ok = 0;
-    for (int d = 0; d < nd; d++) {
-        n_ok += self->meas_ok[k][d];
-    }
-    const mvt_real clutter = (mvt_real)(n_ok > 1 ? n_ok : 1) / ((mvt_real)cam->width * (mvt_real)cam->height);
     for (int i = 0; i < n_live; i++) {
         const int t = live[i];
         const int tentative = self->tracks[t].status == MVT_TRACK_TENTATIVE;
@@ -192,7 +185,7 @@ static void hypothesise(mvt_tracker_t *self, int k, const int live[], int n_live
              * this view's density (the integrated PDA's existence update): on average 1 for a
              * flood's random detections, far more for a person's; 1 - p_detect for an empty gate */
             const mvt_real pd = c->p_detect;
-            self->ev_llr[t] += MVT_LOG(MVT_R(1.0) - pd + pd * g / clutter);
+            self->ev_llr[t] += MVT_LOG(MVT_R(1.0) - pd + pd * g / self->ev_clutter[k]);
         }
     }
     if (!self->reacq_any) {

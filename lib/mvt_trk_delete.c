@@ -14,7 +14,6 @@
  * be in the room leaves its identity for recovery (mvt_trk_recover.c).
  */
 #include <stddef.h>
-#include <string.h>
 
 #include "mvt_trk.h"
 
@@ -105,18 +104,14 @@ void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us)
         const mvt_real lost_s = mvt_us_to_s(now_us - tr->last_explained_us);
         switch (tr->status) {
         case MVT_TRACK_TENTATIVE:
-            /* existence: the detections' evidence since the birth frame, and the views that show
-             * the place in no blob; a sequential test (Wald) with 1 % error either way */
+            /* existence: the evidence of the detections in its gates since the birth frame
+             * (mvt_trk_assoc.c), a sequential test (Wald) with 1 % error either way */
             tr->exist_llr += self->ev_llr[t];
             if (tr->misses >= c->tentative_max_misses || tr->exist_llr <= -MVT_TRK_EXIST_LLR) {
                 reason = &self->counters.deleted_tentative;
             } else if (mvt_trk_popcount(tr->hit_history & window) >= c->confirm_hits &&
                        tr->exist_llr >= MVT_TRK_EXIST_LLR) {
-                tr->status = MVT_TRACK_CONFIRMED;
-                if (tr->held.id != 0) { /* a lost identity recovered */
-                    self->counters.identities_recovered++;
-                    memset(&tr->held, 0, sizeof(tr->held));
-                }
+                mvt_trk_confirm(self, tr);
             }
             break;
         case MVT_TRACK_CONFIRMED:

@@ -260,9 +260,9 @@ static void birth(mvt_tracker_t *self, const mvt_frame_t *frame, const mvt_birth
         if (self->next_id <= 0) { /* 2^31 births: wrap to 1 rather than reuse 0 or go negative */
             self->next_id = 1;
         }
-    } else if (tr->status == MVT_TRACK_CONFIRMED) {
-        self->counters.identities_recovered++;
-        memset(&tr->held, 0, sizeof(tr->held));
+    }
+    if (tr->status == MVT_TRACK_CONFIRMED) {
+        mvt_trk_confirm(self, tr);
     }
     mvt_trk_start(self, tr, x, cov, frame->utime_us);
     tr->seen_z = x[2];

@@ -94,6 +94,7 @@ void mvt_trk_evidence_weights(mvt_tracker_t *self, const mvt_frame_t *frame)
          * version did, made an empty place count *for* a person once the boxes covered more of the
          * picture than p_detect.) */
         self->ev_support[k] = MVT_LOG((pd + (MVT_R(1.0) - pd) * q_match) / q_match);
+        self->ev_clutter[k] = (mvt_real)(n > 1 ? n : 1) / area;
     }
     self->ev_empty = MVT_LOG(MVT_R(1.0) - pd);
 }

@@ -85,6 +85,15 @@ void mvt_trk_give_back(mvt_tracker_t *self, mvt_track_t *tr, int64_t now_us)
     memset(&tr->held, 0, sizeof(tr->held));
 }
 
+void mvt_trk_confirm(mvt_tracker_t *self, mvt_track_t *tr)
+{
+    tr->status = MVT_TRACK_CONFIRMED;
+    if (tr->held.id != 0) { /* the recovered identity is the track's own now */
+        self->counters.identities_recovered++;
+        memset(&tr->held, 0, sizeof(tr->held));
+    }
+}
+
 int32_t mvt_trk_recover(mvt_tracker_t *self, const mvt_real x[3], const mvt_real cov[9], int64_t now_us,
                         mvt_lost_t *held)
 {
@@ -97,13 +106,11 @@ int32_t mvt_trk_recover(mvt_tracker_t *self, const mvt_real x[3], const mvt_real
             continue;
         }
         const mvt_real dt = mvt_us_to_s(now_us - r->lost_us);
-        mvt_real W[9] = {0};
-        W[0] = W[4] = v * v * dt * dt;
-        W[8] = MVT_TRK_HEAD_SD_M * MVT_TRK_HEAD_SD_M;
         mvt_real P[9];
-        for (int k = 0; k < 9; k++) {
-            P[k] = r->P[k] + W[k];
-        }
+        memcpy(P, r->P, sizeof(P));
+        P[0] += v * v * dt * dt; /* + W */
+        P[4] += v * v * dt * dt;
+        P[8] += MVT_TRK_HEAD_SD_M * MVT_TRK_HEAD_SD_M;
         const mvt_real d2 = mvt_trk_mahalanobis3(r->x, P, x, cov);
         if (d2 >= MVT_R(0.0) && d2 <= best_d2) {
             best_d2 = d2;
