@@ -19,11 +19,13 @@ true head point. Writes a Markdown table, summary.json, the occupancy density se
 
     tools/mvtrack pf [--seeds 3] [--scenes interaction crowd4 crowd] [--runs RUN ...] [--daemon-args ARGS]
                      [--out out/pf]
-Rendered logs are kept under OUT/logs and reused while the renderer and the scene are the same.
+Rendered logs are kept under OUT/logs and reused while the code that makes them (scenes, rig,
+renderer) is the same.
 """
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
 import shlex
 import sys
@@ -81,14 +83,25 @@ def build_scene(kind: str, rig, seed: int):
     return crowd_scene(rig, 30.0, seed, n_people=4, returning=0, model=DetectorModel(dropout_cam=None))
 
 
+def _code_hash() -> str:
+    """What a rendered log depends on besides the scene kind and seed: the scene, rig, body and
+    renderer code (their sources' hash)."""
+    here = Path(__file__).parent
+    h = hashlib.sha1()
+    for name in ("crowd.py", "scenes.py", "rig.py", "render.py"):
+        h.update((here / name).read_bytes())
+    return h.hexdigest()
+
+
 def run_one(out: Path, kind: str, seed: int, plot: bool, runs: list[str], daemon_args: list[str] = ()) -> list[dict]:
     rig = smartroom()
     scene = build_scene(kind, rig, seed)
     log = out / "logs" / f"{kind}_{seed}.lcm"
     stamp = out / "logs" / f"{kind}_{seed}.json"
-    key = f"{kind} {seed} {len(scene.people)} {scene.n_frames} {Path(__file__).with_name('render.py').stat().st_mtime_ns}"
-    if log.exists() and stamp.exists() and json.loads(stamp.read_text()).get("key") == key:
-        stats = json.loads(stamp.read_text())["stats"]  # the same scene rendered by the same renderer
+    key = f"{kind} {seed} {_code_hash()}"
+    old = json.loads(stamp.read_text()) if log.exists() and stamp.exists() else {}
+    if old.get("key") == key:
+        stats = old["stats"]  # the same scene rendered by the same code
     else:
         w = LogWriter(str(log))
         stats = write_rendered(w, scene, Renderer(rig, seed=seed), seed, progress=False)
