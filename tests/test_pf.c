@@ -512,6 +512,18 @@ static void test_pft_two_people_tracked_and_reproducible(void **state)
     assert_memory_equal(&a, &b, sizeof(a)); /* same seed, same output, bit for bit */
 }
 
+/* A head-top detection of the head at h in camera k's view (no colour, no box), if it projects. */
+static void add_head(mvt_view_t *v, int k, const double h[3])
+{
+    const mvt_real hp[3] = {(mvt_real)h[0], (mvt_real)h[1], (mvt_real)h[2]};
+    mvt_real uv[2];
+    if (mvt_cam_project(&g_cams[k], hp, uv, NULL) == MVT_OK) {
+        mvt_detection_t *d = &v->det[v->num_detections++];
+        memset(d, 0, sizeof(*d));
+        d->u = uv[0]; d->v = uv[1]; d->sigma_px = 3; d->score = 1; d->hue = d->saturation = -1;
+    }
+}
+
 /* g_pft in the 6 x 5 x 2.5 m test room: particles per target, pixels shared or not, identity
  * recovery time. */
 static void init_room_pft(int particles, int share, mvt_real recover_s)
@@ -539,13 +551,7 @@ static void run_lost_person(mvt_real recover_s, int32_t *before, int32_t *after)
         for (int k = 0; k < 5; k++) {
             mvt_view_t *v = empty_view(k);
             if (f < 60 || f >= 100) paint(k, head, 40);
-            const mvt_real hp[3] = {(mvt_real)head[0], (mvt_real)head[1], (mvt_real)head[2]};
-            mvt_real uv[2];
-            if (mvt_cam_project(&g_cams[k], hp, uv, NULL) == MVT_OK) {
-                mvt_detection_t *d = &v->det[v->num_detections++];
-                memset(d, 0, sizeof(*d));
-                d->u = uv[0]; d->v = uv[1]; d->sigma_px = 3; d->score = 1; d->hue = d->saturation = -1;
-            }
+            add_head(v, k, head);
         }
         assert_int_equal(mvt_pft_step(&g_pft, &g_frame, &g_out), MVT_OK);
         if (f == 59 || f == 149) {
@@ -569,18 +575,6 @@ static void test_pft_lost_person_recovers_identity_from_blob_track(void **state)
     assert_true(after != before && after > 0);
 }
 
-
-/* A head-top detection of the head at h in camera k's view (no colour, no box), if it projects. */
-static void add_head(mvt_view_t *v, int k, const double h[3])
-{
-    const mvt_real hp[3] = {(mvt_real)h[0], (mvt_real)h[1], (mvt_real)h[2]};
-    mvt_real uv[2];
-    if (mvt_cam_project(&g_cams[k], hp, uv, NULL) == MVT_OK) {
-        mvt_detection_t *d = &v->det[v->num_detections++];
-        memset(d, 0, sizeof(*d));
-        d->u = uv[0]; d->v = uv[1]; d->sigma_px = 3; d->score = 1; d->hue = d->saturation = -1;
-    }
-}
 
 /* B stands still; A walks up to 0.64 m beside B and vanishes (masks and detections gone: they
  * left through a door there). Returns B's identity at frame 60 and at the end, the number of
