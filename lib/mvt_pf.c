@@ -256,7 +256,8 @@ static inline int view_index(const mvt_camera_t *c, const mvt_pf_fov_t *f, const
 }
 
 /* Log of Eq. 11 x Eq. 13 for a particle's colour state at mask pixel idx (foreground) or the
- * background floor. */
+ * background floor (also outside the image: marginalising the colour there as well, log 0,
+ * measured more identity switches on rendered video, docs/particle-filter.md). */
 static inline mvt_real colour_log(const mvt_pf_tables_t *tab, const mvt_mask_t *m, int idx, mvt_real h, mvt_real s)
 {
     if (idx < 0 || !m->fg[idx]) {
@@ -270,21 +271,26 @@ static inline mvt_real colour_log(const mvt_pf_tables_t *tab, const mvt_mask_t *
     return tab->log_h[dh] + tab->log_s[ds];
 }
 
-/* D at mask pixel idx as this target may read it: the floor outside the image, 1/2 where another
- * target's claim covers the pixel (evidence neither way). *behind: 0 unclaimed, 1 claimed by a
- * target farther than the point's camera depth z, 2 by a nearer one. O(1). */
-static inline uint8_t claimed_level(const uint8_t *d, const mvt_pf_claims_t *cl, const mvt_pf_tables_t *tab, int idx,
-                                    mvt_real z, int *behind)
+/* D at mask pixel idx as this target may read it. Outside the image the camera saw nothing, and
+ * an observation not made is marginalised out: the point reads `unseen`, the level whose log term
+ * is 0 (255 for a point expected on the body, 0 for one expected on background), the same for
+ * every hypothesis. Read as background, it pulled every column a camera sees only in part (head
+ * above the image's top edge, feet below its bottom) into the image, onto the body's lower half;
+ * at 1/2, half as hard. Where another target's claim covers the pixel: 1/2, evidence neither way.
+ * *behind: 0 unclaimed, 1 claimed by a target farther than the point's camera depth z, 2 by a
+ * nearer one. O(1). */
+static inline uint8_t claimed_level(const uint8_t *d, const mvt_pf_claims_t *cl, int idx, mvt_real z, uint8_t unseen,
+                                    int *behind)
 {
     *behind = 0;
     if (idx < 0) {
-        return tab->d_floor;
+        return unseen;
     }
     if (cl == NULL || cl->depth[idx] == 0u) {
         return d[idx];
     }
     *behind = cl->depth[idx] < mvt_pf_claim_depth(z) ? 2 : 1;
-    return 128u;
+    return MVT_PF_LEVEL_UNKNOWN;
 }
 
 void mvt_pf_weight(mvt_pf_pool_t *p, const mvt_camera_t *cams, const mvt_pf_fov_t *fovs,
@@ -322,10 +328,10 @@ void mvt_pf_weight(mvt_pf_pool_t *p, const mvt_camera_t *cams, const mvt_pf_fov_
             if (body == NULL) {
                 const int idx = view_index(c, f, img, xc[0], xc[1], xc[2]);
                 int behind;
-                const uint8_t l = claimed_level(d, cl, tab, idx, xc[2], &behind);
+                const uint8_t l = claimed_level(d, cl, idx, xc[2], 255u, &behind);
                 lw = tab->log_d[l];
                 n_fg += !behind && idx >= 0 && d[idx] > fg_level;
-                n_hidden += behind != 0;
+                n_hidden += behind != 0 || idx < 0;
                 if (colour) {
                     lw += behind == 2 ? tab->log_colour_background : colour_log(tab, img->mask, idx, p->h[i], p->s[i]);
                 }
@@ -341,10 +347,10 @@ void mvt_pf_weight(mvt_pf_pool_t *p, const mvt_camera_t *cams, const mvt_pf_fov_
                 const int it = view_index(c, f, img, xc[0] + dz_torso * ux, xc[1] + dz_torso * uy, zt);
                 const int il = view_index(c, f, img, xc[0] + dz_legs * ux, xc[1] + dz_legs * uy, zl);
                 int ba, bh, bt, bl;
-                const uint8_t la = claimed_level(d, cl, tab, ia, za, &ba);
-                const uint8_t lh = claimed_level(d, cl, tab, ih, zh, &bh);
-                const uint8_t lt = claimed_level(d, cl, tab, it, zt, &bt);
-                const uint8_t ll = claimed_level(d, cl, tab, il, zl, &bl);
+                const uint8_t la = claimed_level(d, cl, ia, za, 0u, &ba);
+                const uint8_t lh = claimed_level(d, cl, ih, zh, 255u, &bh);
+                const uint8_t lt = claimed_level(d, cl, it, zt, 255u, &bt);
+                const uint8_t ll = claimed_level(d, cl, il, zl, 255u, &bl);
                 (void)ba;
                 (void)bl;
                 lw = tab->log_bg[la] + tab->log_d[lh] + tab->log_d[lt] + tab->log_d[ll];
@@ -352,7 +358,7 @@ void mvt_pf_weight(mvt_pf_pool_t *p, const mvt_camera_t *cams, const mvt_pf_fov_
                     const mvt_real dz_face = -body->face_m, zf = xc[2] + dz_face * uz;
                     const int iff = view_index(c, f, img, xc[0] + dz_face * ux, xc[1] + dz_face * uy, zf);
                     int bf;
-                    lw += tab->log_d[claimed_level(d, cl, tab, iff, zf, &bf)];
+                    lw += tab->log_d[claimed_level(d, cl, iff, zf, 255u, &bf)];
                 }
                 if (body->clear_m > MVT_R(0.0)) {
                     uint8_t top_level = 0u;
@@ -360,13 +366,13 @@ void mvt_pf_weight(mvt_pf_pool_t *p, const mvt_camera_t *cams, const mvt_pf_fov_
                         const mvt_real dz = body->clear_m * (mvt_real)j / MVT_R(3.0), zc = xc[2] + dz * uz;
                         const int ic = view_index(c, f, img, xc[0] + dz * ux, xc[1] + dz * uy, zc);
                         int bc;
-                        const uint8_t l = claimed_level(d, cl, tab, ic, zc, &bc);
+                        const uint8_t l = claimed_level(d, cl, ic, zc, 0u, &bc);
                         top_level = l > top_level ? l : top_level;
                     }
                     lw += tab->log_bg[top_level];
                 }
                 n_fg += !bh && ih >= 0 && d[ih] > fg_level;
-                n_hidden += bh != 0;
+                n_hidden += bh != 0 || ih < 0;
                 if (colour) {
                     lw += bt == 2 ? tab->log_colour_background : colour_log(tab, img->mask, it, p->h[i], p->s[i]);
                 }

@@ -30,6 +30,9 @@ extern "C" {
 
 /* Largest blur radius in mask pixels (3 sigma); larger sigmas are clamped to it. */
 #define MVT_PF_MAX_RADIUS 24
+/* The likelihood level that is evidence neither way (D = 1/2): a point outside a camera's image
+ * or on pixels another target has claimed. */
+#define MVT_PF_LEVEL_UNKNOWN 128u
 /* Rows a blur workspace can flag (mask height is at most the image height, < 32768). */
 #define MVT_PF_MAX_ROWS (MVT_MAX_MASK_PIXELS < 32768 ? MVT_MAX_MASK_PIXELS : 32768)
 
@@ -143,7 +146,9 @@ typedef struct mvt_pf_body {
                             default 0.7 */
     mvt_real legs_frac;  /* legs point at this fraction of z, (0, 1); default 0.3 */
     mvt_real min_top_m;  /* lowest head top (mvt_pft reflects hypotheses below it: a shadow on the
-                            floor is a perfect column of height ~0), >= 0; default 0.9 */
+                            floor is a perfect column of height ~0, and the legs of two people
+                            one of height ~0.9 m), >= 0; default 1.1 (a seated adult's head is
+                            higher) */
     mvt_real face_m;     /* a second point this far under the top should be foreground too (the
                             face), >= 0, 0: none; default 0.16. With one head point, a hypothesis
                             far above the head costs only that point: the likelihood along z had a
@@ -179,8 +184,10 @@ static inline uint8_t mvt_pf_claim_depth(mvt_real z)
  * head, face (when face_m > 0), torso and legs points plus log max(1 - D, p_B) at the point above
  * the top and (clear_m > 0) at the largest D of the three points higher up. With colour (use_colour and the camera's mask has colour), the scored point (point model: the
  * particle; column model: the torso point) adds on foreground the log of Eq. 11 x Eq. 13 at its
- * pixel, on background log(h_B s_B). A point outside the image or behind the camera reads D = p_B
- * (and log(h_B s_B)), the same as background.
+ * pixel, on background log(h_B s_B). A point outside the image or behind the camera reads D = 1/2:
+ * the camera saw nothing there (as background it pulled every column a camera sees only in part,
+ * head above the image or feet below it, into the image and onto the body's lower half; measured
+ * on rendered video, docs/particle-filter.md). Its colour term is log(h_B s_B).
  * claims (may be NULL; else one per camera, width 0 for none): a point on a pixel another target
  * explains reads D = 1/2 whatever the mask says. Another silhouette makes that pixel foreground
  * whether or not this target is there too, so it is evidence neither way (the likelihood ratio of
@@ -188,8 +195,9 @@ static inline uint8_t mvt_pf_claim_depth(mvt_real z)
  * (otherwise log(h_B s_B)): the nearer body is the one whose colour the camera sees.
  * on_fg[k] (may be NULL) receives, per camera, the fraction of particles (unweighted) whose
  * particle (column model: head point) has D above the midpoint between p_B and 1 on a pixel no
- * other target claims; hidden[k] (may be NULL) the fraction whose point is on a claimed pixel (the
- * view cannot tell whether this target is there: another explains what it sees).
+ * other target claims; hidden[k] (may be NULL) the fraction whose point (column model: head point)
+ * the view cannot judge: on a claimed pixel (another target explains what it sees) or outside the
+ * image.
  * O(n * num_cams) projections (column model: 4 to 8 per particle and camera). */
 void mvt_pf_weight(mvt_pf_pool_t *pool, const mvt_camera_t *cams, const mvt_pf_fov_t *fovs,
                    const mvt_pf_image_t *images, int num_cams, const mvt_pf_tables_t *tab, int use_colour,

@@ -29,7 +29,7 @@ void mvt_pft_config_default(mvt_pft_config_t *c)
     c->body.head_m = MVT_R(0.06);
     c->body.torso_frac = MVT_R(0.7);
     c->body.legs_frac = MVT_R(0.3);
-    c->body.min_top_m = MVT_R(0.9);
+    c->body.min_top_m = MVT_R(1.1);
     c->body.face_m = MVT_R(0.16);
     c->body.clear_m = MVT_R(0.9);
     c->num_particles = MVT_MAX_PARTICLES;
@@ -542,8 +542,8 @@ mvt_err_t mvt_pft_step(mvt_pft_t *self, const mvt_frame_t *frame, mvt_output_t *
             a->est.head_z = column_top(self, a->est.mean, a->est.head_z, masks);
         }
         /* a view supports the target when enough of its head hypotheses are on foreground that no
-         * nearer target explains; a view where most are behind a nearer target's pixels is hidden
-         * and does not count against it */
+         * nearer target explains; a view where most are behind a nearer target's pixels or outside
+         * the image cannot see the head and does not count against it */
         a->cameras_used = 0u;
         int visible = 0;
         for (int k = 0; k < num_cams; k++) {

@@ -47,7 +47,7 @@ typedef struct mvt_pft_config {
                                    scored along the body under it (mvt_pf_weight); 0: the paper's
                                    point model, a particle is a point of the body */
     mvt_pf_body_t body;         /* column model: above 0.06 m, head 0.06 m, torso 0.7, legs 0.3,
-                                   lowest top 0.9 m, face 0.16 m, clear 0.9 m */
+                                   lowest top 1.1 m, face 0.16 m, clear 0.9 m */
     int num_particles;          /* per target, 16..MVT_MAX_PARTICLES; default MVT_MAX_PARTICLES */
     int use_colour;             /* 1 (default): MS+C for cameras that send hue/saturation; 0: MS */
     mvt_real lik_exponent;      /* each camera's log-likelihood is multiplied by this, (0, 1]: the
@@ -120,7 +120,7 @@ typedef struct mvt_pft_counters {
     uint64_t deleted_outside;
     uint64_t deleted_duplicate;
     uint64_t identities_recovered;   /* targets confirmed with a lost target's identity */
-    uint64_t views_hidden;           /* target-views where the target was behind a nearer one's pixels */
+    uint64_t views_hidden;           /* target-views where the head was behind a nearer target's pixels or outside the image */
     uint64_t resamples;
     uint64_t numeric_faults;         /* non-finite weights: reset to uniform */
 } mvt_pft_counters_t;

@@ -199,9 +199,10 @@ static mvt_pf_image_t g_wimg[5];
 static mvt_mask_t g_wmask[5];
 
 /* D at a world point through mvt_cam_project (the Jacobian-capable path, checked against OpenCV in
- * test_camera), or the floor outside the image / behind the camera. */
+ * test_camera), or `unseen` outside the image / behind the camera (the level whose log term is 0:
+ * 255 for a point expected on the body, 0 for one expected on background). */
 static mvt_pf_fov_t g_wfov[5];
-static int ref_level(int k, const double xw[3], const mvt_pf_tables_t *tab, int *idx_out)
+static int ref_level(int k, const double xw[3], int unseen, int *idx_out)
 {
     const mvt_real x[3] = {(mvt_real)xw[0], (mvt_real)xw[1], (mvt_real)xw[2]};
     mvt_real uv[2], xc[3];
@@ -210,11 +211,11 @@ static int ref_level(int k, const double xw[3], const mvt_pf_tables_t *tab, int 
     const mvt_pf_fov_t *f = &g_wfov[k]; /* outside the lens model's window: not projected */
     if (xc[2] > 1e-3 && !(xc[0] / xc[2] >= f->x_min && xc[0] / xc[2] <= f->x_max && xc[1] / xc[2] >= f->y_min &&
                           xc[1] / xc[2] <= f->y_max))
-        return tab->d_floor;
-    if (mvt_cam_project(&g_wcams[k], x, uv, NULL) != MVT_OK) return tab->d_floor;
+        return unseen;
+    if (mvt_cam_project(&g_wcams[k], x, uv, NULL) != MVT_OK) return unseen;
     const int idx = mvt_pf_image_index(&g_wimg[k], uv[0], uv[1]);
     *idx_out = idx;
-    return idx >= 0 ? g_wimg[k].d[idx] : tab->d_floor;
+    return idx >= 0 ? g_wimg[k].d[idx] : unseen;
 }
 
 static double ref_colour(const mvt_pf_tables_t *tab, int k, int idx, double h, double s)
@@ -279,17 +280,17 @@ static void test_weight_point_and_column_match_projection(void **state)
                 double lw;
                 if (!column) {
                     const double p[3] = {x, y, z};
-                    const int l = ref_level(k, p, &tab, &idx);
+                    const int l = ref_level(k, p, 255, &idx);
                     lw = tab.log_d[l];
-                    n_fg[k] += l > fg_level;
+                    n_fg[k] += idx >= 0 && l > fg_level;
                 } else {
                     const double above[3] = {x, y, z + 0.06}, head[3] = {x, y, z - 0.06};
                     const double legs[3] = {x, y, 0.3 * z}, torso[3] = {x, y, 0.7 * z};
                     int ia, ih, il;
-                    lw = tab.log_bg[ref_level(k, above, &tab, &ia)] + tab.log_d[ref_level(k, legs, &tab, &il)];
-                    const int lh = ref_level(k, head, &tab, &ih);
-                    lw += tab.log_d[lh] + tab.log_d[ref_level(k, torso, &tab, &idx)];
-                    n_fg[k] += lh > fg_level;
+                    lw = tab.log_bg[ref_level(k, above, 0, &ia)] + tab.log_d[ref_level(k, legs, 255, &il)];
+                    const int lh = ref_level(k, head, 255, &ih);
+                    lw += tab.log_d[lh] + tab.log_d[ref_level(k, torso, 255, &idx)];
+                    n_fg[k] += ih >= 0 && lh > fg_level;
                 }
                 if (g_wmask[k].has_colour) lw += ref_colour(&tab, k, idx, g_pool.h[i], g_pool.s[i]);
                 want += 0.5 * lw;
@@ -334,7 +335,7 @@ static void test_weight_claimed_pixels_are_no_evidence(void **state)
     scatter_pool(&r);
     mvt_real on_fg[5], hidden[5];
     mvt_pf_weight(&g_pool, g_wcams, g_wfov, g_wimg, 5, &tab, 1, &body, 0.5f, g_claims, on_fg, hidden);
-    int off = 0, n_fg[5] = {0}, n_hid[5] = {0};
+    int off = 0, n_fg[5] = {0}, n_hid[5] = {0}, n_out[5] = {0};
     for (int i = 0; i < g_pool.n; i++) {
         double want = 0;
         for (int k = 0; k < 5; k++) {
@@ -344,7 +345,7 @@ static void test_weight_claimed_pixels_are_no_evidence(void **state)
                                       {x, y, z - 0.16}, {x, y, z + 0.3}, {x, y, z + 0.6}, {x, y, z + 0.9}};
             int lv[8], idx[8], behind[8];
             for (int j = 0; j < 8; j++) {
-                lv[j] = ref_level(k, pts[j], &tab, &idx[j]);
+                lv[j] = ref_level(k, pts[j], j == 0 || j >= 5 ? 0 : 255, &idx[j]);
                 behind[j] = 0;
                 if (k != 1 && idx[j] >= 0 && g_claims[k].depth[idx[j]] != 0) {
                     const mvt_real xw[3] = {(mvt_real)pts[j][0], (mvt_real)pts[j][1], (mvt_real)pts[j][2]};
@@ -358,8 +359,9 @@ static void test_weight_claimed_pixels_are_no_evidence(void **state)
             const int clear = lv[5] > lv[6] ? (lv[5] > lv[7] ? lv[5] : lv[7]) : (lv[6] > lv[7] ? lv[6] : lv[7]);
             double lw = tab.log_bg[lv[0]] + tab.log_d[lv[1]] + tab.log_d[lv[2]] + tab.log_d[lv[3]] + tab.log_d[lv[4]] +
                         tab.log_bg[clear];
-            n_fg[k] += !behind[1] && lv[1] > fg_level;
-            n_hid[k] += behind[1] != 0;
+            n_fg[k] += !behind[1] && idx[1] >= 0 && lv[1] > fg_level;
+            n_hid[k] += behind[1] != 0 || idx[1] < 0;
+            n_out[k] += idx[1] < 0;
             if (g_wmask[k].has_colour) {
                 lw += behind[2] == 2 ? tab.log_colour_background : ref_colour(&tab, k, idx[2], g_pool.h[i], g_pool.s[i]);
                 farther_colour += behind[2] == 1 && idx[2] >= 0 && g_wmask[k].fg[idx[2]];
@@ -375,7 +377,8 @@ static void test_weight_claimed_pixels_are_no_evidence(void **state)
         if (fabs(on_fg[k] - f) > 0.011 || fabs(hidden[k] - h) > 0.011)
             fail_msg("camera %d: on_fg %.4f hidden %.4f, reference %.4f %.4f", k, on_fg[k], hidden[k], f, h);
     }
-    assert_true(hidden[1] == 0 && hidden[0] > 0.1); /* the mis-sized claims were ignored */
+    /* the mis-sized claims were ignored: camera 1 hides only heads outside its image */
+    assert_true(fabs(hidden[1] - n_out[1] / 300.0) < 1e-6 && hidden[0] > n_out[0] / 300.0 + 0.1);
 }
 
 /* ---- the tracker on painted masks ---------------------------------------------------------- */
@@ -676,7 +679,9 @@ static void test_pft_ghost_column_of_others_bodies_not_kept(void **state)
     const int shared = run_ghost_column(1);
     print_message("ghost column: a confirmed ghost in %d of 200 frames with independent filters, %d with shared pixels\n",
                   independent, shared);
-    assert_true(independent > 100); /* the scene does make a ghost that other bodies keep alive ... */
+    assert_true(independent >= 20); /* the scene does make a ghost that other bodies keep alive (30
+                                       frames since points outside an image are marginalised, 100+
+                                       when they read as background) ... */
     assert_true(shared <= 5);       /* ... and shared pixels leave it nothing to live on */
 }
 
