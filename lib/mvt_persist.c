@@ -114,6 +114,8 @@ void mvt_tracker_save(const mvt_tracker_t *self, mvt_tracker_persist_t *out)
     out->last_utime_us = self->last_utime_us;
     out->counters = self->counters;
     memcpy(out->lost, self->lost, sizeof(out->lost));
+    out->birth_rate = self->birth_rate;
+    out->birth_rate_us = self->birth_rate_us;
 }
 
 /* A lost identity (free, or kept for recovery): a place, a covariance with a non-negative
@@ -144,7 +146,9 @@ static int seen_height_ok(const mvt_tracker_config_t *c, const mvt_track_t *tr)
 static int tracker_state_ok(const mvt_tracker_config_t *c, const mvt_tracker_persist_t *p)
 {
     if (p->next_id <= 0 || (p->have_time != 0 && p->have_time != 1) || p->last_utime_us < 0 ||
-        p->last_utime_us > (INT64_C(1) << 61)) {
+        p->last_utime_us > (INT64_C(1) << 61) || !(p->birth_rate >= MVT_R(0.0)) ||
+        !(p->birth_rate <= (mvt_real)MVT_MAX_BIRTH_CANDIDATES) || p->birth_rate_us < 0 ||
+        p->birth_rate_us > p->last_utime_us) {
         return 0;
     }
     int32_t ids[MVT_MAX_TARGETS];
@@ -217,6 +221,8 @@ mvt_err_t mvt_tracker_resume(mvt_tracker_t *self, const mvt_tracker_persist_t *p
     self->have_time = p->have_time;
     self->last_utime_us = p->last_utime_us;
     self->counters = p->counters;
+    self->birth_rate = p->birth_rate;
+    self->birth_rate_us = p->birth_rate_us;
     return MVT_OK;
 }
 

@@ -338,6 +338,9 @@ typedef struct mvt_tracker {
     mvt_real ev_clutter[MVT_MAX_CAMERAS];  /* clutter density: the view's detections (every one
                                               possibly clutter, at least one) per pixel^2 */
     mvt_real ev_llr[MVT_MAX_TARGETS];      /* this frame's existence evidence of tentative tracks */
+    mvt_real birth_rate;        /* births tried per frame, averaged over MVT_TRK_BIRTH_RATE_S
+                                   (mvt_trk_init.c: the prior odds of a new track) */
+    int64_t birth_rate_us;      /* the frame it was last updated, 0: never */
 } mvt_tracker_t;
 
 /* Fills cfg with the documented defaults (volume: a 10 m cube around the origin, z >= 0). */
@@ -374,6 +377,8 @@ typedef struct mvt_tracker_persist {
     int64_t last_utime_us;
     mvt_counters_t counters;
     mvt_lost_t lost[MVT_MAX_LOST];
+    mvt_real birth_rate;
+    int64_t birth_rate_us;
 } mvt_tracker_persist_t;
 
 /* Copies the persistent part of the tracker into out (padding zeroed: equal states give equal

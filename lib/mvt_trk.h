@@ -30,6 +30,8 @@ static inline int mvt_trk_popcount(uint32_t x)
  * ln(99), a sequential test with 1 % error either way. In ordinary clutter a person's first frame
  * after the birth passes it; in a flood of false alarms a ghost's random detections do not. */
 #define MVT_TRK_EXIST_LLR MVT_R(4.595)
+/* Time over which the rate of births tried is averaged for their prior odds (mvt_trk_init.c), s */
+#define MVT_TRK_BIRTH_RATE_S MVT_R(1.0)
 
 /* Mahalanobis distance squared of b from a, covariance Pa + Pb (3x3 each); < 0 if singular. */
 mvt_real mvt_trk_mahalanobis3(const mvt_real a[3], const mvt_real Pa[9], const mvt_real b[3], const mvt_real Pb[9]);

@@ -27,14 +27,20 @@ static int near_side_wall(const mvt_tracker_config_t *c, const mvt_real x[3])
     return 0;
 }
 
-/* Deletes the younger of every pair of live tracks closer than dup_dist_m (confirmed beats
- * tentative, then the older identity wins). O(T^2). */
+/* Deletes one of every pair of live tracks closer than dup_dist_m: confirmed beats tentative, then
+ * a track the cameras placed this frame (seen_min_views views) beats one they did not, then the
+ * older identity wins. Two tracks become duplicates when one was pulled onto the other's person (a
+ * merged blob's top, a detection along one view's ray): the placed track is that person's, the one
+ * that drifted there is not, and its own person (hidden, most often) may still be in the room, so
+ * a confirmed victim leaves its identity for recovery (mvt_trk_recover.c). Measured on the masks'
+ * connected components and rig 12's queue, docs/tracking.md. O(T^2). */
 static void delete_duplicates(mvt_tracker_t *self, int64_t now_us)
 {
     const mvt_real r2 = self->cfg.dup_dist_m * self->cfg.dup_dist_m;
     if (!(r2 > MVT_R(0.0))) {
         return;
     }
+    const int min_views = self->cfg.seen_min_views < self->num_cameras ? self->cfg.seen_min_views : self->num_cameras;
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         mvt_track_t *a = &self->tracks[t];
         for (int u = t + 1; u < MVT_MAX_TARGETS && a->id != 0; u++) {
@@ -47,9 +53,15 @@ static void delete_duplicates(mvt_tracker_t *self, int64_t now_us)
                 continue;
             }
             const int a_conf = a->status != MVT_TRACK_TENTATIVE, b_conf = b->status != MVT_TRACK_TENTATIVE;
-            const int drop_a = a_conf != b_conf ? !a_conf : a->id > b->id;
+            const int a_hit = mvt_trk_popcount(a->cameras_used) >= min_views;
+            const int b_hit = mvt_trk_popcount(b->cameras_used) >= min_views;
+            const int drop_a = a_conf != b_conf ? !a_conf : (a_hit != b_hit ? !a_hit : a->id > b->id);
             mvt_track_t *victim = drop_a ? a : b;
-            mvt_trk_give_back(self, victim, now_us); /* a tentative holding a lost identity */
+            if (victim->status == MVT_TRACK_TENTATIVE) {
+                mvt_trk_give_back(self, victim, now_us); /* a tentative holding a lost identity */
+            } else {
+                mvt_trk_lose(self, victim, now_us);
+            }
             victim->id = 0;
             self->counters.deletions++;
             self->counters.duplicates_deleted++;

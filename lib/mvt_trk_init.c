@@ -223,7 +223,9 @@ static int near_existing_track(const mvt_tracker_t *self, const mvt_real x[3])
     return 0;
 }
 
-static void birth(mvt_tracker_t *self, const mvt_frame_t *frame, const mvt_birth_cand_t *cand)
+/* Births a track from a candidate. Returns its slot, MVT_MAX_TARGETS when every slot is taken, -1
+ * when the candidate is no place for a person (no robust point, outside the volume, near a track). */
+static int birth(mvt_tracker_t *self, const mvt_frame_t *frame, const mvt_birth_cand_t *cand)
 {
     const mvt_tracker_config_t *c = &self->cfg;
     for (int i = 0; i < cand->n; i++) {
@@ -232,7 +234,7 @@ static void birth(mvt_tracker_t *self, const mvt_frame_t *frame, const mvt_birth
     mvt_real x[3], cov[9];
     uint32_t inl = 0;
     if (!mvt_trk_cand_point(self, cand, x, cov, &inl) || near_existing_track(self, x)) {
-        return;
+        return -1;
     }
     uint32_t bits = 0;
     for (int i = 0; i < cand->n; i++) {
@@ -249,7 +251,7 @@ static void birth(mvt_tracker_t *self, const mvt_frame_t *frame, const mvt_birth
     }
     if (slot < 0) {
         self->counters.births_refused_full++;
-        return;
+        return MVT_MAX_TARGETS;
     }
     mvt_track_t *tr = &self->tracks[slot];
     memset(tr, 0, sizeof(*tr));
@@ -273,6 +275,7 @@ static void birth(mvt_tracker_t *self, const mvt_frame_t *frame, const mvt_birth
     tr->last_explained_us = frame->utime_us;
     tr->last_consistent_us = frame->utime_us;
     self->counters.births++;
+    return slot;
 }
 
 void mvt_trk_candidates(mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order, int count)
@@ -315,17 +318,52 @@ int mvt_trk_cand_point(mvt_tracker_t *self, const mvt_birth_cand_t *cand, mvt_re
     return mvt_tri_covariance(self->cams, in, mi, x, cov) == MVT_OK;
 }
 
+/* The prior odds of this frame's new tracks. The existence test (mvt_trk_delete.c) errs 1 % of the
+ * time per track; a flood of false alarms tries hundreds of tracks in a second, and 1 % of them
+ * were confirmed ghosts (4 on the daemon's flood test). Of the tracks tried while one could be
+ * confirmed (confirm_window frames), at most one is expected to be a person who just came: people
+ * do not arrive five a second. With n tried, the prior odds of each are 1 : (n - 1), so its
+ * evidence starts at -ln n: a Bonferroni correction of the sequential test, which changes nothing
+ * while births come one at a time. n is the larger of this frame's births and the rate of the last
+ * MVT_TRK_BIRTH_RATE_S (a flood's births come in bursts, between them a ghost is tried alone). */
+static void birth_prior(mvt_tracker_t *self, int64_t now_us, int tried, const int born[], int n_born)
+{
+    const mvt_real dt = self->birth_rate_us > 0 ? mvt_us_to_s(now_us - self->birth_rate_us) : MVT_R(1e9);
+    const mvt_real a = MVT_R(1.0) - MVT_EXP(-(dt > MVT_R(0.0) ? dt : MVT_R(0.0)) / MVT_TRK_BIRTH_RATE_S);
+    self->birth_rate += a * ((mvt_real)tried - self->birth_rate);
+    self->birth_rate_us = now_us;
+    mvt_real n = self->birth_rate * (mvt_real)self->cfg.confirm_window;
+    n = n > (mvt_real)tried ? n : (mvt_real)tried;
+    if (!(n > MVT_R(1.0))) {
+        return;
+    }
+    const mvt_real prior = MVT_LOG(n);
+    for (int i = 0; i < n_born; i++) {
+        mvt_track_t *tr = &self->tracks[born[i]];
+        if (tr->status == MVT_TRACK_TENTATIVE) {
+            tr->exist_llr -= prior;
+        }
+    }
+}
+
 void mvt_trk_initiate(mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order)
 {
     mvt_trk_candidates(self, frame, order, n_order, 1);
+    int born[MVT_MAX_TARGETS], n_born = 0, tried = 0;
     for (int i = 0; i < self->num_cand; i++) {
         const mvt_birth_cand_t *cand = &self->cand[i];
         int free_all = 1;
         for (int v = 0; v < cand->n && free_all; v++) {
             free_all = !self->used[cand->cam[v]][cand->det[v]];
         }
-        if (free_all) {
-            birth(self, frame, cand);
+        if (!free_all) {
+            continue;
+        }
+        const int slot = birth(self, frame, cand);
+        tried += slot >= 0;
+        if (slot >= 0 && slot < MVT_MAX_TARGETS) {
+            born[n_born++] = slot;
         }
     }
+    birth_prior(self, frame->utime_us, tried, born, n_born);
 }

@@ -8,9 +8,9 @@
  * occluded_max_s, or views showed its place empty for contra_max_s (its estimate drifted off a
  * hidden person). The person is then born again a few frames later under a new identity: an identity
  * switch that no association can prevent, because the old track no longer exists. Tracks that
- * left (through a side wall, out of the volume), tracks too uncertain to have a place, and
- * duplicates (the same person as a surviving track) are not kept: their person is gone, nowhere in
- * particular, or still tracked.
+ * left (through a side wall, out of the volume) and tracks too uncertain to have a place are not
+ * kept: their person is gone or nowhere in particular. A confirmed duplicate is kept: it is the
+ * track that drifted onto another's person (mvt_trk_delete.c), and its own may be hidden nearby.
  *
  * The test. A record keeps the deleted track's horizontal position x_l as the motion models
  * predicted it at the deletion, with its covariance P_l, and the head height (and its variance) of

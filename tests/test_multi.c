@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "mvt_tracker.h"
+#include "mvt_trk.h"
 #include "test_support.h"
 
 static mvt_tracker_t g_tracker;
@@ -274,6 +275,58 @@ static void test_mvt_tracker_step_close_pair_both_kept(void **state)
 {
     (void)state;
     close_pair(0);
+}
+
+/* Two confirmed tracks end up on one person: the older one was pulled there (along one view's ray,
+ * by a merged blob's top) while the cameras placed the younger. The duplicate rule keeps the placed
+ * track and deletes the other, whose identity is kept for recovery (its own person may be hidden
+ * nearby); when both or neither were placed, the older identity wins. */
+static void duplicate_pair(uint32_t used_old, uint32_t used_young, int *old_kept, int *young_kept, int *old_record)
+{
+    init();
+    const mvt_real q[3] = {0.5f, 0.5f, 0.05f}; /* one model: the state edited below is the track's */
+    mvt_imm_config_single(&g_tracker.cfg.motion, q);
+    test_rng_t rng = {31};
+    const mvt_real X[2][3] = {{1.5f, 1.5f, 1.70f}, {4.0f, 3.5f, 1.80f}};
+    int64_t t = 1000000;
+    for (int f = 0; f < 20; f++, t += 40000) {
+        frame_of(X, 2, t, &rng, 1.0, 0);
+        assert_int_equal(mvt_tracker_step(&g_tracker, &g_frame, &g_out), MVT_OK);
+    }
+    const int32_t id_old = id_near(X[0]), id_young = id_near(X[1]);
+    assert_true(id_old > 0 && id_young > id_old);
+    mvt_track_t *a = NULL, *b = NULL;
+    for (int i = 0; i < MVT_MAX_TARGETS; i++) {
+        a = g_tracker.tracks[i].id == id_old ? &g_tracker.tracks[i] : a;
+        b = g_tracker.tracks[i].id == id_young ? &g_tracker.tracks[i] : b;
+    }
+    assert_non_null(a);
+    assert_non_null(b);
+    a->s.x[0] = b->s.x[0] + 0.1f; /* the old track drifted onto the young one's person */
+    a->s.x[1] = b->s.x[1];
+    a->s.x[2] = b->s.x[2] - 0.05f;
+    a->cameras_used = used_old;
+    b->cameras_used = used_young;
+    mvt_trk_delete(&g_tracker, t);
+    *old_kept = a->id == id_old;
+    *young_kept = b->id == id_young;
+    *old_record = 0;
+    for (int i = 0; i < MVT_MAX_LOST; i++) {
+        *old_record |= g_tracker.lost[i].id == id_old;
+    }
+    assert_int_equal(g_tracker.counters.duplicates_deleted, 1);
+}
+
+static void test_mvt_tracker_duplicates_placed_track_kept(void **state)
+{
+    (void)state;
+    int old_kept, young_kept, old_record;
+    duplicate_pair(0x1u, 0x1fu, &old_kept, &young_kept, &old_record); /* one view placed the old one */
+    assert_true(!old_kept && young_kept && old_record);
+    duplicate_pair(0x3u, 0x1fu, &old_kept, &young_kept, &old_record); /* both placed: the older wins */
+    assert_true(old_kept && !young_kept);
+    duplicate_pair(0x0u, 0x1u, &old_kept, &young_kept, &old_record); /* neither placed: the older wins */
+    assert_true(old_kept && !young_kept);
 }
 
 static void test_mvt_tracker_step_false_alarm_flood_confirmed_tracks_survive(void **state)
@@ -699,6 +752,7 @@ int main(void)
         cmocka_unit_test(test_mvt_tracker_step_two_people_crossing_keep_identities),
         cmocka_unit_test(test_mvt_tracker_step_lost_tracks_reacquired_by_height),
         cmocka_unit_test(test_mvt_tracker_step_close_pair_both_kept),
+        cmocka_unit_test(test_mvt_tracker_duplicates_placed_track_kept),
         cmocka_unit_test(test_mvt_tracker_step_false_alarm_flood_confirmed_tracks_survive),
         cmocka_unit_test(test_mvt_tracker_step_more_people_than_capacity_births_refused_counted),
         cmocka_unit_test(test_mvt_tracker_step_person_returns_new_identity),
