@@ -48,6 +48,12 @@ void mvt_trk_lose(mvt_tracker_t *self, const mvt_track_t *tr, int64_t now_us);
 void mvt_trk_give_back(mvt_tracker_t *self, mvt_track_t *tr, int64_t now_us);
 int32_t mvt_trk_recover(mvt_tracker_t *self, const mvt_real x[3], const mvt_real cov[9], int64_t now_us,
                         mvt_lost_t *held);
+/* Before a birth at x: a confirmed track that no camera placed this frame and whose place views
+ * show empty (contradicted, not yet deleted) and which passes the record test for x is deleted
+ * into a record (counted as contradicted), unless a kept record is nearer; mvt_trk_recover then
+ * gives its identity to the birth. Without it the birth came first and recovery could not act.
+ * O(MVT_MAX_TARGETS + MVT_MAX_LOST). */
+void mvt_trk_release_contradicted(mvt_tracker_t *self, const mvt_real x[3], const mvt_real cov[9], int64_t now_us);
 
 /* Hypothesise + associate for camera k (tracks already predicted to the camera's capture time):
  * fills assign[t] with the detection that updates track t (or -1) and merged[t] with 1 when that

@@ -242,6 +242,7 @@ static int birth(mvt_tracker_t *self, const mvt_frame_t *frame, const mvt_birth_
             bits |= 1u << cand->cam[i];
         }
     }
+    mvt_trk_release_contradicted(self, x, cov, frame->utime_us); /* its person, born again? */
     int slot = -1;
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         if (self->tracks[t].id == 0) {

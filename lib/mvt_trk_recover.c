@@ -53,17 +53,13 @@ static mvt_lost_t *free_record(mvt_tracker_t *self, int64_t now_us)
     return best;
 }
 
-void mvt_trk_lose(mvt_tracker_t *self, const mvt_track_t *tr, int64_t now_us)
+/* What mvt_trk_lose would keep of a track, without keeping it. */
+static void record_of(const mvt_track_t *tr, int64_t until_us, mvt_lost_t *r)
 {
-    const mvt_real keep_s = self->cfg.recover_s;
-    if (!(keep_s > MVT_R(0.0)) || tr->id == 0) {
-        return;
-    }
-    mvt_lost_t *r = free_record(self, now_us);
     memset(r, 0, sizeof(*r));
     r->id = tr->id;
     r->lost_us = tr->last_update_us; /* the person's whereabouts are unknown since */
-    r->until_us = now_us + (int64_t)(keep_s * MVT_R(1e6));
+    r->until_us = until_us;
     for (int i = 0; i < 2; i++) {
         r->x[i] = tr->s.x[i];
         for (int j = 0; j < 2; j++) {
@@ -72,6 +68,15 @@ void mvt_trk_lose(mvt_tracker_t *self, const mvt_track_t *tr, int64_t now_us)
     }
     r->x[2] = tr->seen_z;
     r->P[8] = tr->seen_zz;
+}
+
+void mvt_trk_lose(mvt_tracker_t *self, const mvt_track_t *tr, int64_t now_us)
+{
+    const mvt_real keep_s = self->cfg.recover_s;
+    if (!(keep_s > MVT_R(0.0)) || tr->id == 0) {
+        return;
+    }
+    record_of(tr, now_us + (int64_t)(keep_s * MVT_R(1e6)), free_record(self, now_us));
 }
 
 void mvt_trk_give_back(mvt_tracker_t *self, mvt_track_t *tr, int64_t now_us)
@@ -94,10 +99,24 @@ void mvt_trk_confirm(mvt_tracker_t *self, mvt_track_t *tr)
     }
 }
 
-int32_t mvt_trk_recover(mvt_tracker_t *self, const mvt_real x[3], const mvt_real cov[9], int64_t now_us,
-                        mvt_lost_t *held)
+/* d^2 of a birth at x (covariance cov) from record r at now_us (the test above), < 0 if singular. */
+static mvt_real record_d2(const mvt_tracker_t *self, const mvt_lost_t *r, const mvt_real x[3], const mvt_real cov[9],
+                          int64_t now_us)
 {
     const mvt_real v = self->cfg.init_vel_std_ms;
+    const mvt_real dt = mvt_us_to_s(now_us - r->lost_us);
+    mvt_real P[9];
+    memcpy(P, r->P, sizeof(P));
+    P[0] += v * v * dt * dt; /* + W */
+    P[4] += v * v * dt * dt;
+    P[8] += MVT_TRK_HEAD_SD_M * MVT_TRK_HEAD_SD_M;
+    return mvt_trk_mahalanobis3(r->x, P, x, cov);
+}
+
+/* The record nearest a birth at x within the gate (its d^2 in *d2), or -1. */
+static int nearest_record(const mvt_tracker_t *self, const mvt_real x[3], const mvt_real cov[9], int64_t now_us,
+                          mvt_real *d2_out)
+{
     int best = -1;
     mvt_real best_d2 = MVT_TRK_GATE3;
     for (int i = 0; i < MVT_MAX_LOST; i++) {
@@ -105,18 +124,52 @@ int32_t mvt_trk_recover(mvt_tracker_t *self, const mvt_real x[3], const mvt_real
         if (r->id == 0 || r->until_us < now_us) {
             continue;
         }
-        const mvt_real dt = mvt_us_to_s(now_us - r->lost_us);
-        mvt_real P[9];
-        memcpy(P, r->P, sizeof(P));
-        P[0] += v * v * dt * dt; /* + W */
-        P[4] += v * v * dt * dt;
-        P[8] += MVT_TRK_HEAD_SD_M * MVT_TRK_HEAD_SD_M;
-        const mvt_real d2 = mvt_trk_mahalanobis3(r->x, P, x, cov);
+        const mvt_real d2 = record_d2(self, r, x, cov, now_us);
         if (d2 >= MVT_R(0.0) && d2 <= best_d2) {
             best_d2 = d2;
             best = i;
         }
     }
+    *d2_out = best_d2;
+    return best;
+}
+
+void mvt_trk_release_contradicted(mvt_tracker_t *self, const mvt_real x[3], const mvt_real cov[9], int64_t now_us)
+{
+    if (!(self->cfg.recover_s > MVT_R(0.0))) {
+        return;
+    }
+    int best = -1;
+    mvt_real best_d2 = MVT_TRK_GATE3;
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        const mvt_track_t *tr = &self->tracks[t];
+        if (tr->id == 0 || tr->status == MVT_TRACK_TENTATIVE || tr->misses < 1 || tr->last_consistent_us >= now_us) {
+            continue; /* tentative, placed this frame, or not contradicted */
+        }
+        mvt_lost_t r;
+        record_of(tr, now_us, &r);
+        const mvt_real d2 = record_d2(self, &r, x, cov, now_us);
+        if (d2 >= MVT_R(0.0) && d2 <= best_d2) {
+            best_d2 = d2;
+            best = t;
+        }
+    }
+    mvt_real rec_d2;
+    if (best < 0 || (nearest_record(self, x, cov, now_us, &rec_d2) >= 0 && rec_d2 < best_d2)) {
+        return; /* none in reach, or a deleted track's record is nearer: recovery gives that one */
+    }
+    mvt_track_t *tr = &self->tracks[best];
+    mvt_trk_lose(self, tr, now_us);
+    tr->id = 0;
+    self->counters.deleted_contradicted++;
+    self->counters.deletions++;
+}
+
+int32_t mvt_trk_recover(mvt_tracker_t *self, const mvt_real x[3], const mvt_real cov[9], int64_t now_us,
+                        mvt_lost_t *held)
+{
+    mvt_real d2;
+    const int best = nearest_record(self, x, cov, now_us, &d2);
     if (best < 0) {
         return 0;
     }

@@ -329,6 +329,58 @@ static void test_mvt_tracker_duplicates_placed_track_kept(void **state)
     assert_true(old_kept && !young_kept);
 }
 
+/* A confirmed track drifted 0.4 m off its hidden person, so views show its place empty
+ * (contradicted), and 0.2 s after the cameras last placed it the person is born again there: the
+ * old track is deleted into a record and the birth takes its identity through recovery. Not when
+ * the track's place is not contradicted (it may be a hidden person's), when the birth is 0.3 m
+ * shorter, out of walking reach, or when recovery is off. Returns the identity the birth recovers
+ * (0: none) and whether the old track is still alive. */
+static int32_t contradicted_then_born(int contradicted, const mvt_real at[3], mvt_real recover_s, int *alive)
+{
+    init();
+    g_tracker.cfg.recover_s = recover_s;
+    const mvt_real q[3] = {0.5f, 0.5f, 0.05f}; /* one model: the state edited below is the track's */
+    mvt_imm_config_single(&g_tracker.cfg.motion, q);
+    test_rng_t rng = {37};
+    const mvt_real X[1][3] = {{3.0f, 2.5f, 1.75f}};
+    int64_t t = 1000000;
+    for (int f = 0; f < 25; f++, t += 40000) {
+        frame_of(X, 1, t, &rng, 1.0, 0);
+        assert_int_equal(mvt_tracker_step(&g_tracker, &g_frame, &g_out), MVT_OK);
+    }
+    const int32_t id = id_near(X[0]);
+    assert_true(id > 0);
+    mvt_track_t *tr = NULL;
+    for (int i = 0; i < MVT_MAX_TARGETS; i++) {
+        tr = g_tracker.tracks[i].id == id ? &g_tracker.tracks[i] : tr;
+    }
+    assert_non_null(tr);
+    tr->s.x[0] += 0.4f; /* drifted off its person ... */
+    tr->misses = 5;     /* ... unplaced for 5 frames ... */
+    tr->last_update_us = t - 200000;
+    tr->last_consistent_us = contradicted ? t - 120000 : t; /* ... and its place seen empty */
+    const mvt_real cov[9] = {0.0004f, 0, 0, 0, 0.0004f, 0, 0, 0, 0.0009f};
+    mvt_trk_release_contradicted(&g_tracker, at, cov, t);
+    *alive = tr->id == id;
+    mvt_lost_t held;
+    const int32_t got = mvt_trk_recover(&g_tracker, at, cov, t, &held);
+    assert_true(got == 0 || got == id);
+    return got;
+}
+
+static void test_mvt_tracker_contradicted_track_gives_identity_to_rebirth(void **state)
+{
+    (void)state;
+    int alive = 0;
+    const mvt_real same[3] = {3.0f, 2.5f, 1.75f}, shorter[3] = {3.0f, 2.5f, 1.45f}, far[3] = {5.0f, 0.5f, 1.75f};
+    assert_true(contradicted_then_born(1, same, 3.0f, &alive) > 0 && !alive);
+    assert_int_equal(g_tracker.counters.deleted_contradicted, 1);
+    assert_true(contradicted_then_born(0, same, 3.0f, &alive) == 0 && alive); /* hidden, not contradicted */
+    assert_true(contradicted_then_born(1, shorter, 3.0f, &alive) == 0 && alive);
+    assert_true(contradicted_then_born(1, far, 3.0f, &alive) == 0 && alive);
+    assert_true(contradicted_then_born(1, same, 0.0f, &alive) == 0 && alive); /* recovery off */
+}
+
 static void test_mvt_tracker_step_false_alarm_flood_confirmed_tracks_survive(void **state)
 {
     (void)state;
@@ -753,6 +805,7 @@ int main(void)
         cmocka_unit_test(test_mvt_tracker_step_lost_tracks_reacquired_by_height),
         cmocka_unit_test(test_mvt_tracker_step_close_pair_both_kept),
         cmocka_unit_test(test_mvt_tracker_duplicates_placed_track_kept),
+        cmocka_unit_test(test_mvt_tracker_contradicted_track_gives_identity_to_rebirth),
         cmocka_unit_test(test_mvt_tracker_step_false_alarm_flood_confirmed_tracks_survive),
         cmocka_unit_test(test_mvt_tracker_step_more_people_than_capacity_births_refused_counted),
         cmocka_unit_test(test_mvt_tracker_step_person_returns_new_identity),
