@@ -139,9 +139,10 @@ typedef struct mvt_tracker_config {
                                    >= 1. A tentative or confirmed track is refuted in a frame the
                                    same way */
     mvt_real recover_s;         /* identity recovery: a confirmed track deleted while its person may
-                                   still be in the room (unseen, hidden too long, contradicted; not
-                                   one that left through a side wall or the volume, nor one too
-                                   uncertain to have a place, nor a duplicate) keeps its identity
+                                   still be in the room (unseen, hidden too long, contradicted, or
+                                   the duplicate that drifted onto another's person; not one that
+                                   left through a side wall or the volume, nor one too uncertain to
+                                   have a place) keeps its identity
                                    this long, and a person born within walking reach of where it
                                    was lost (init_vel_std_ms times the time since it last saw its
                                    person, plus both covariances), at its head height, takes it

@@ -9,7 +9,8 @@
  * standard deviation exceeds max_pos_std_m on any axis, when it leaves the volume (plus margin),
  * or when its covariance cannot be repaired. A track unseen for exit_coast_s near the volume's
  * side walls is deleted sooner (people leave through the sides). Of two tracks closer than
- * dup_dist_m in 3D (one person, two tracks), the younger one is deleted. Identities of deleted
+ * dup_dist_m in 3D (one person, two tracks), the one the cameras did not place is deleted, else
+ * the younger (delete_duplicates). Identities of deleted
  * tracks are never given to another person; a confirmed track deleted while its person may still
  * be in the room leaves its identity for recovery (mvt_trk_recover.c).
  */
