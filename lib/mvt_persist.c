@@ -12,6 +12,7 @@
 #include "mvt_linalg.h"
 #include "mvt_pft.h"
 #include "mvt_tracker.h"
+#include "mvt_trk.h"
 
 /* Positions within the tracked volume widened by MVT_PERSIST_SLACK_M, speeds below
  * MVT_PERSIST_MAX_SPEED: any tracker keeps its estimates far inside these (it deletes tracks that
@@ -131,7 +132,8 @@ static int lost_ok(const mvt_tracker_config_t *c, const mvt_lost_t *r, int64_t n
             return 0;
         }
     }
-    return r->id > 0 && r->reserved == 0 && time_ok(r->lost_us, now) && r->until_us >= r->lost_us &&
+    return r->id > 0 && r->reserved == 0 && mvt_trk_app_ok(&r->app) && time_ok(r->lost_us, now) &&
+           r->until_us >= r->lost_us &&
            r->until_us <= now + (INT64_C(1) << 60) && mvt_la_all_finite(r->x, 3) &&
            mvt_la_all_finite(r->P, 9) && place_ok(c, r->x, zero);
 }
@@ -163,6 +165,7 @@ static int tracker_state_ok(const mvt_tracker_config_t *c, const mvt_tracker_per
             !time_ok(tr->last_update_us, now) || !time_ok(tr->last_explained_us, now) ||
             !time_ok(tr->last_consistent_us, now) || tr->misses < 0 || !bank_ok(c, tr) ||
             !lost_ok(c, &tr->held, now) || !isfinite(tr->exist_llr) || !seen_height_ok(c, tr) ||
+            !mvt_trk_app_ok(&tr->app) ||
             (tr->held.id != 0 && (tr->held.id != tr->id || tr->status != MVT_TRACK_TENTATIVE))) {
             return 0;
         }

@@ -129,6 +129,7 @@ static void prepare_measurements(mvt_tracker_t *self, const mvt_frame_t *frame)
             const mvt_real sigma = det->sigma_px > MVT_R(0.0) ? det->sigma_px : cam->sigma_px;
             self->used[k][d] = 0;
             self->meas_ok[k][d] = 0;
+            self->chroma_ok[k][d] = (uint8_t)mvt_trk_chroma(det, self->chroma[k][d]);
             const mvt_err_t err = mvt_pkf_meas_make(cam, uv, sigma, &self->meas[k][d]);
             if (err == MVT_OK) {
                 self->meas_ok[k][d] = 1;
@@ -154,7 +155,7 @@ static void step_projective(mvt_tracker_t *self, const mvt_frame_t *frame, const
         }
         int assign[MVT_MAX_TARGETS];
         uint8_t merged[MVT_MAX_TARGETS];
-        mvt_trk_associate(self, k, assign, merged);
+        mvt_trk_associate(self, &frame->views[k], k, assign, merged);
         if (c->occlusion) {
             mvt_trk_occlusion(self, &frame->views[k], k, assign);
         }
@@ -174,6 +175,10 @@ static void step_projective(mvt_tracker_t *self, const mvt_frame_t *frame, const
                 tr->cameras_used |= 1u << k;
                 self->counters.updates++;
                 self->counters.merged_updates += merged[t];
+                if (self->chroma_ok[k][assign[t]] && self->merge_nb[t] < 0 && !merged[t]) {
+                    /* a blob that may hold an unresolved neighbour mixes two people's colour */
+                    mvt_trk_app_update(&tr->app, self->chroma[k][assign[t]]);
+                }
             } else {
                 self->counters.numeric_faults++;
             }
@@ -194,7 +199,7 @@ static void step_triangulate(mvt_tracker_t *self, const mvt_frame_t *frame, cons
     int assign[MVT_MAX_CAMERAS][MVT_MAX_TARGETS];
     uint8_t merged[MVT_MAX_TARGETS];
     for (int oi = 0; oi < n_order; oi++) {
-        mvt_trk_associate(self, order[oi], assign[oi], merged);
+        mvt_trk_associate(self, &frame->views[order[oi]], order[oi], assign[oi], merged);
     }
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         mvt_track_t *tr = &self->tracks[t];
@@ -275,6 +280,14 @@ void mvt_tracker_output(const mvt_tracker_t *self, int64_t utime_us, mvt_output_
         o->cameras_used = tr->cameras_used;
         o->hue = MVT_R(-1.0);
         o->saturation = MVT_R(-1.0);
+        if (tr->app.n > MVT_R(0.0)) {
+            const mvt_real *m = tr->app.m;
+            mvt_real h = MVT_ATAN2(m[1], m[0]) / MVT_R(6.283185307179586);
+            h = h < MVT_R(0.0) ? h + MVT_R(1.0) : h;
+            o->hue = h < MVT_R(1.0) ? h : MVT_R(0.0);
+            const mvt_real sat = MVT_SQRT(m[0] * m[0] + m[1] * m[1]);
+            o->saturation = sat < MVT_R(1.0) ? sat : MVT_R(1.0);
+        }
     }
 }
 

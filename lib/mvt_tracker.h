@@ -235,6 +235,16 @@ typedef struct mvt_counters {
                                          recover_s (identity recovery) */
 } mvt_counters_t;
 
+/* A person's appearance as the blobs' colour shows it (mvt_trk_app.c): the blob's mean hue h and
+ * saturation s as a chroma point a = s (cos 2 pi h, sin 2 pi h) in the unit disc (grey clothes sit
+ * near the centre, where hue means nothing), its mean m over the detections given to the track, and
+ * the spread var (per axis) of those detections about it. n = 0: not seen in colour yet. */
+typedef struct mvt_app {
+    mvt_real m[2];
+    mvt_real var;               /* per axis, chroma units^2 */
+    mvt_real n;                 /* detections behind m (weighted, at most MVT_TRK_APP_NMAX) */
+} mvt_app_t;
+
 /* A lost identity kept for recovery (recover_s). */
 typedef struct mvt_lost {
     int32_t id;                 /* 0: free */
@@ -244,6 +254,7 @@ typedef struct mvt_lost {
     mvt_real x[3];              /* position when deleted (x, y as predicted then; z the height the
                                    last frame the track was seen) */
     mvt_real P[9];              /* its covariance (3x3, row-major; z uncorrelated) */
+    mvt_app_t app;              /* its appearance */
 } mvt_lost_t;
 
 /* Lost identities kept at once (the one nearest its deadline gives way). */
@@ -276,6 +287,7 @@ typedef struct mvt_track {
                                    a person's does not (identity recovery compares this) */
     mvt_lost_t held;            /* tentative track born with a lost identity (held.id == id): the
                                    record it took, given back if the track dies tentative */
+    mvt_app_t app;              /* its appearance (blobs with colour only) */
 } mvt_track_t;
 
 /* Multi-view birth candidates examined per frame (the best are kept; the excess is counted). */
@@ -307,6 +319,8 @@ typedef struct mvt_tracker {
     /* per-frame workspaces (no state carried between frames) */
     mvt_pkf_meas_t meas[MVT_MAX_CAMERAS][MVT_MAX_DETECTIONS];
     uint8_t meas_ok[MVT_MAX_CAMERAS][MVT_MAX_DETECTIONS];
+    mvt_real chroma[MVT_MAX_CAMERAS][MVT_MAX_DETECTIONS][2]; /* the detection's colour (mvt_app_t) */
+    uint8_t chroma_ok[MVT_MAX_CAMERAS][MVT_MAX_DETECTIONS];  /* ... sent and valid */
     uint8_t used[MVT_MAX_CAMERAS][MVT_MAX_DETECTIONS];
     int num_meas[MVT_MAX_CAMERAS];
     mvt_real cost[MVT_MAX_TARGETS][MVT_MAX_DETECTIONS]; /* < 0: outside the gate */

@@ -33,6 +33,45 @@ static inline int mvt_trk_popcount(uint32_t x)
 /* Time over which the rate of births tried is averaged for their prior odds (mvt_trk_init.c), s */
 #define MVT_TRK_BIRTH_RATE_S MVT_R(1.0)
 
+/* Appearance (mvt_trk_app.c). A person's blobs do not all show their colour: a merged blob mixes two
+ * people, a fragment shows only the legs, a shadow greys the mean. So a detection's chroma is the
+ * person's, N(m, V I) with V = var (1 + 1/n) (the spread plus the mean's own uncertainty), with
+ * probability 1 - MVT_TRK_APP_OUTLIER, and anywhere in the chroma disc (density 1 / pi)
+ * otherwise. Its likelihood ratio against someone else's (or clutter's) blob, also anywhere in the
+ * disc, is LR = (1 - eps) exp(-r^2 / 2V) / (2V) + eps, between eps and (1 - eps) / 2V + eps: an
+ * odd colour can only cost -2 ln eps, however far it is. Measured on rendered scenes (blob chroma
+ * of people's own detections against ground truth): spread per axis 0.08-0.34 (median 0.12-0.17),
+ * people's means 0.11-0.94 apart (median 0.37-0.65), 10-32 % of a person's detections beyond three
+ * robust standard deviations (docs/tracking.md, "Colour"). */
+#define MVT_TRK_APP_OUTLIER MVT_R(0.2)
+/* the spread a new person's colour is assumed to have until their own detections say (prior
+ * weight MVT_TRK_APP_N0 detections), and the least it may shrink to (sensor noise), chroma units */
+#define MVT_TRK_APP_SD0 MVT_R(0.15)
+#define MVT_TRK_APP_N0 MVT_R(5.0)
+#define MVT_TRK_APP_SD_MIN MVT_R(0.05)
+/* the memory of the estimate, detections: about 2 s of 5 cameras, so that light that changes over a
+ * room changes it, and a wrong person's few detections do not */
+#define MVT_TRK_APP_NMAX MVT_R(250.0)
+
+/* A detection's chroma from its hue and saturation; 0 when either is unknown or invalid. */
+int mvt_trk_chroma(const mvt_detection_t *det, mvt_real a[2]);
+/* Resets an appearance to "not seen in colour". */
+void mvt_trk_app_reset(mvt_app_t *app);
+/* -2 ln LR of chroma a for appearance app (0 when app->n == 0), and its least value (a at m). */
+mvt_real mvt_trk_app_cost(const mvt_app_t *app, const mvt_real a[2]);
+mvt_real mvt_trk_app_cost_min(const mvt_app_t *app);
+/* Adds a detection's chroma: weighted by the chance that it shows this person (the mixture above). */
+void mvt_trk_app_update(mvt_app_t *app, const mvt_real a[2]);
+/* A birth candidate's colour: the chroma of its inlier detections that carry one. */
+typedef struct mvt_app_obs {
+    int n;
+    mvt_real a[MVT_MAX_CAMERAS][2];
+} mvt_app_obs_t;
+/* Sum of mvt_trk_app_cost over obs (independent views): what the colour says against app. */
+mvt_real mvt_trk_app_obs_cost(const mvt_app_t *app, const mvt_app_obs_t *obs);
+/* A valid appearance (a checkpoint's): finite, m in the disc, var and n in range. */
+int mvt_trk_app_ok(const mvt_app_t *app);
+
 /* Mahalanobis distance squared of b from a, covariance Pa + Pb (3x3 each); < 0 if singular. */
 mvt_real mvt_trk_mahalanobis3(const mvt_real a[3], const mvt_real Pa[9], const mvt_real b[3], const mvt_real Pb[9]);
 
@@ -46,20 +85,22 @@ mvt_real mvt_trk_mahalanobis3(const mvt_real a[3], const mvt_real Pa[9], const m
 void mvt_trk_confirm(mvt_tracker_t *self, mvt_track_t *tr);
 void mvt_trk_lose(mvt_tracker_t *self, const mvt_track_t *tr, int64_t now_us);
 void mvt_trk_give_back(mvt_tracker_t *self, mvt_track_t *tr, int64_t now_us);
-int32_t mvt_trk_recover(mvt_tracker_t *self, const mvt_real x[3], const mvt_real cov[9], int64_t now_us,
-                        mvt_lost_t *held);
+int32_t mvt_trk_recover(mvt_tracker_t *self, const mvt_real x[3], const mvt_real cov[9], const mvt_app_obs_t *obs,
+                        int64_t now_us, mvt_lost_t *held);
 /* Before a birth at x: a confirmed track that no camera placed this frame and whose place views
  * show empty (contradicted, not yet deleted) and which passes the record test for x is deleted
  * into a record (counted as contradicted), unless a kept record is nearer; mvt_trk_recover then
  * gives its identity to the birth. Without it the birth came first and recovery could not act.
  * O(MVT_MAX_TARGETS + MVT_MAX_LOST). */
-void mvt_trk_release_contradicted(mvt_tracker_t *self, const mvt_real x[3], const mvt_real cov[9], int64_t now_us);
+void mvt_trk_release_contradicted(mvt_tracker_t *self, const mvt_real x[3], const mvt_real cov[9],
+                                  const mvt_app_obs_t *obs, int64_t now_us);
 
 /* Hypothesise + associate for camera k (tracks already predicted to the camera's capture time):
  * fills assign[t] with the detection that updates track t (or -1) and merged[t] with 1 when that
  * detection is shared with unresolved tracks (its covariance is widened by merge_cov[t]). Marks
  * the assigned detections used. O(T * D) gating + O(cluster^2 * (cluster + D)) assignment. */
-void mvt_trk_associate(mvt_tracker_t *self, int k, int assign[MVT_MAX_TARGETS], uint8_t merged[MVT_MAX_TARGETS]);
+void mvt_trk_associate(mvt_tracker_t *self, const mvt_view_t *view, int k, int assign[MVT_MAX_TARGETS],
+                       uint8_t merged[MVT_MAX_TARGETS]);
 
 /* Occlusion hypotheses for camera k after associate (view: its detections and boxes, assign: as
  * filled by mvt_trk_associate): confirmed tracks left without a detection whose predicted head

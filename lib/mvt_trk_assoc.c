@@ -30,9 +30,32 @@ static int find_root(int16_t *parent, int t)
     return t;
 }
 
-static mvt_real miss_cost(const mvt_tracker_config_t *c)
+/* The colour's part of the cost of giving detection d of camera k to track t, in -2 ln LR units
+ * shifted by the least the track's colour cost can be (s_t = mvt_trk_app_cost_min <= 0), so that
+ * every cost stays >= 0: c(t, d) - s_t, where c is -2 ln LR of the detection's chroma, and 0 (LR 1)
+ * when the detection carries no colour that can be the person's alone. The "missed" column carries
+ * the same shift (LR 1: no detection, no colour), so between tracks only the likelihoods count.
+ * 0 with the paper's gate (a distance in other units). */
+static mvt_real app_cost(const mvt_tracker_t *self, int k, int t, int d)
 {
-    return c->gate == MVT_GATE_PAPER ? c->paper_delta : c->gate_chi2;
+    if (self->cfg.gate == MVT_GATE_PAPER) {
+        return MVT_R(0.0);
+    }
+    const mvt_app_t *app = &self->tracks[t].app;
+    const int usable = self->chroma_ok[k][d] && self->merge_nb[t] < 0;
+    return (usable ? mvt_trk_app_cost(app, self->chroma[k][d]) : MVT_R(0.0)) - mvt_trk_app_cost_min(app);
+}
+
+/* The cost of track t missing this view: the gate (a detection inside it is likelier the track's
+ * than nothing), shifted like app_cost. A detection near the gate's edge whose colour is not the
+ * person's is then left: its likelihood ratio is below 1. */
+static mvt_real miss_cost(const mvt_tracker_t *self, int t)
+{
+    const mvt_tracker_config_t *c = &self->cfg;
+    if (c->gate == MVT_GATE_PAPER) {
+        return c->paper_delta;
+    }
+    return c->gate_chi2 - mvt_trk_app_cost_min(&self->tracks[t].app);
 }
 
 /* Squared image distance between two predictions and the squared merge radius in pixels. */
@@ -46,7 +69,8 @@ static int unresolved(const mvt_tracker_t *self, const mvt_camera_t *cam, int t,
     return *d2_px < w * w;
 }
 
-/* -2 log-likelihood of detection d for track t: d^2 + ln |S| (the 2 pi term cancels). */
+/* -2 log-likelihood of detection d for track t: d^2 + ln |S| (the 2 pi term cancels). Not the
+ * colour: the blob this is asked of may hold both people, and its colour is then their mixture. */
 static mvt_real neg2_loglik(const mvt_tracker_t *self, int k, int t, int d)
 {
     mvt_pkf_innov_t in;
@@ -90,7 +114,42 @@ static int in_picture(const mvt_camera_t *cam, const mvt_pkf_pred_t *p)
     return su < w && sv < h && p->h[0] >= -mu && p->h[0] <= w + mu && p->h[1] >= -mv && p->h[1] <= h + mv;
 }
 
-static void hypothesise(mvt_tracker_t *self, int k, const int live[], int n_live)
+/* Does the blob of detection d hold the predicted heads of two or more seen people (confirmed or
+ * coasting tracks)? Then its colour is their mixture, mostly the colour of the one in front, while
+ * its top is the head of the one higher in the picture: its colour says nothing of anyone
+ * (chroma_ok cleared for the frame). A head counts within three standard deviations of its
+ * prediction (and the pixel noise) of the box. Blobs without a box: the unresolved pairs
+ * (merge_nb) stand in for this. Measured on the masks' connected components (crowd, 3 seeds),
+ * judged against the ground truth where the colour changed an assignment: without this rule the
+ * colour was right 189 times and wrong 186, with it right 192 and wrong 174. */
+static int blob_holds_two(const mvt_tracker_t *self, const mvt_view_t *view, int k, int d, const int live[],
+                          int n_live)
+{
+    const mvt_real *b = view->det[d].box;
+    if (!(isfinite(b[0]) && isfinite(b[1]) && isfinite(b[2]) && isfinite(b[3]) && b[2] > b[0] && b[3] > b[1])) {
+        return 0;
+    }
+    const mvt_camera_t *cam = &self->cams[k];
+    int n = 0;
+    for (int i = 0; i < n_live && n < 2; i++) {
+        const int t = live[i];
+        const mvt_track_t *tr = &self->tracks[t];
+        if (!self->pred_ok[t] || tr->status == MVT_TRACK_TENTATIVE) {
+            continue;
+        }
+        const mvt_pkf_pred_t *p = &self->pred[t];
+        mvt_real uv[2] = {p->h[0], p->h[1]};
+        if (p->lin != MVT_PKF_JACOBIAN && mvt_cam_project(cam, tr->s.x, uv, NULL) != MVT_OK) {
+            continue;
+        }
+        const mvt_real su = MVT_R(3.0) * MVT_SQRT(p->hph[0] + cam->sigma_px * cam->sigma_px);
+        const mvt_real sv = MVT_R(3.0) * MVT_SQRT(p->hph[2] + cam->sigma_px * cam->sigma_px);
+        n += uv[0] >= b[0] - su && uv[0] <= b[2] + su && uv[1] >= b[1] - sv && uv[1] <= b[3] + sv;
+    }
+    return n >= 2;
+}
+
+static void hypothesise(mvt_tracker_t *self, const mvt_view_t *view, int k, const int live[], int n_live)
 {
     const mvt_tracker_config_t *c = &self->cfg;
     const mvt_camera_t *cam = &self->cams[k];
@@ -145,6 +204,11 @@ static void hypothesise(mvt_tracker_t *self, int k, const int live[], int n_live
             self->merge_cov[t][2] = dy * dy * third;
         }
     }
+    for (int d = 0; d < nd; d++) {
+        if (self->chroma_ok[k][d] && blob_holds_two(self, view, k, d, live, n_live)) {
+            self->chroma_ok[k][d] = 0;
+        }
+    }
     for (int i = 0; i < n_live; i++) {
         const int t = live[i];
         const int tentative = self->tracks[t].status == MVT_TRACK_TENTATIVE;
@@ -165,7 +229,7 @@ static void hypothesise(mvt_tracker_t *self, int k, const int live[], int n_live
                             cost = dist;
                         }
                     } else if (in.d2 <= c->gate_chi2) {
-                        cost = in.d2;
+                        cost = in.d2 + app_cost(self, k, t, d);
                         const mvt_real det = in.S[0] * in.S[2] - in.S[1] * in.S[1];
                         if (tentative && det > MVT_R(0.0)) {
                             g += MVT_EXP(MVT_R(-0.5) * in.d2) / (MVT_R(6.2831853) * MVT_SQRT(det));
@@ -229,18 +293,20 @@ static void solve_cluster(mvt_tracker_t *self, int k, int r, const int live[], i
         }
     }
     if (nr == 1 && nc == 1) {
-        assign[self->cl_rows[0]] = self->cl_cols[0];
+        const int t = self->cl_rows[0], d = self->cl_cols[0];
+        if (self->cost[t][d] <= miss_cost(self, t)) {
+            assign[t] = d;
+        }
         return;
     }
     const int ncols = nc + nr;
-    const mvt_real miss = miss_cost(&self->cfg);
     for (int i = 0; i < nr; i++) {
         mvt_real *row = &self->cl_cost[i * ncols];
         for (int j = 0; j < nc; j++) {
             row[j] = self->cost[self->cl_rows[i]][self->cl_cols[j]];
         }
         for (int j = 0; j < nr; j++) {
-            row[nc + j] = i == j ? miss : MVT_R(-1.0);
+            row[nc + j] = i == j ? miss_cost(self, self->cl_rows[i]) : MVT_R(-1.0);
         }
     }
     if (mvt_assoc_solve(self->cl_cost, nr, ncols, ncols, self->cl_assign, &self->assoc_ws) != MVT_OK) {
@@ -255,7 +321,8 @@ static void solve_cluster(mvt_tracker_t *self, int k, int r, const int live[], i
     }
 }
 
-void mvt_trk_associate(mvt_tracker_t *self, int k, int assign[MVT_MAX_TARGETS], uint8_t merged[MVT_MAX_TARGETS])
+void mvt_trk_associate(mvt_tracker_t *self, const mvt_view_t *view, int k, int assign[MVT_MAX_TARGETS],
+                       uint8_t merged[MVT_MAX_TARGETS])
 {
     int live[MVT_MAX_TARGETS];
     int n_live = 0;
@@ -267,7 +334,7 @@ void mvt_trk_associate(mvt_tracker_t *self, int k, int assign[MVT_MAX_TARGETS], 
             live[n_live++] = t;
         }
     }
-    hypothesise(self, k, live, n_live);
+    hypothesise(self, view, k, live, n_live);
 
     /* clusters: tracks linked by a detection inside both gates */
     const int nd = self->num_meas[k];

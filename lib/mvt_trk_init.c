@@ -237,12 +237,19 @@ static int birth(mvt_tracker_t *self, const mvt_frame_t *frame, const mvt_birth_
         return -1;
     }
     uint32_t bits = 0;
+    mvt_app_obs_t obs; /* the colour of its inlier detections */
+    obs.n = 0;
     for (int i = 0; i < cand->n; i++) {
         if (inl & (1u << i)) {
             bits |= 1u << cand->cam[i];
+            if (self->chroma_ok[cand->cam[i]][cand->det[i]]) {
+                obs.a[obs.n][0] = self->chroma[cand->cam[i]][cand->det[i]][0];
+                obs.a[obs.n][1] = self->chroma[cand->cam[i]][cand->det[i]][1];
+                obs.n++;
+            }
         }
     }
-    mvt_trk_release_contradicted(self, x, cov, frame->utime_us); /* its person, born again? */
+    mvt_trk_release_contradicted(self, x, cov, &obs, frame->utime_us); /* its person, born again? */
     int slot = -1;
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         if (self->tracks[t].id == 0) {
@@ -257,7 +264,7 @@ static int birth(mvt_tracker_t *self, const mvt_frame_t *frame, const mvt_birth_
     mvt_track_t *tr = &self->tracks[slot];
     memset(tr, 0, sizeof(*tr));
     tr->status = c->confirm_hits <= 1 ? MVT_TRACK_CONFIRMED : MVT_TRACK_TENTATIVE;
-    tr->id = mvt_trk_recover(self, x, cov, frame->utime_us, &tr->held); /* a person lost just now? */
+    tr->id = mvt_trk_recover(self, x, cov, &obs, frame->utime_us, &tr->held); /* a person lost just now? */
     if (tr->id == 0) {
         tr->id = self->next_id++;
         if (self->next_id <= 0) { /* 2^31 births: wrap to 1 rather than reuse 0 or go negative */
@@ -270,6 +277,13 @@ static int birth(mvt_tracker_t *self, const mvt_frame_t *frame, const mvt_birth_
     mvt_trk_start(self, tr, x, cov, frame->utime_us);
     tr->seen_z = x[2];
     tr->seen_zz = cov[8];
+    mvt_trk_app_reset(&tr->app);
+    if (tr->held.id != 0 && mvt_trk_app_ok(&tr->held.app)) {
+        tr->app = tr->held.app; /* a recovered person's colour, as their old track knew it */
+    }
+    for (int i = 0; i < obs.n; i++) {
+        mvt_trk_app_update(&tr->app, obs.a[i]);
+    }
     tr->cameras_used = bits;
     tr->hit_history = 1u;
     tr->last_update_us = frame->utime_us;

@@ -25,7 +25,8 @@
  * contra_max_s, and a standing person's motion model (its covariance grows a few millimetres a
  * second) says nothing about where they went (rig 11 from rendered video: a contradicted track
  * 0.4 m from its person's rebirth, 0.56 s after it last saw them, was 54 chi-square units away
- * when counted from the deletion, 1.0 from the last frame seen). Of several records in reach, the nearest in d^2 wins. The height is what
+ * when counted from the deletion, 1.0 from the last frame seen). Of several records in reach, the least d^2 plus the colour's -2 ln LR
+ * (mvt_trk_app.c: the birth's detections against the record's colour) wins. The height is what
  * tells two people apart after a gap (re-acquisition uses the same cue).
  *
  * The identity goes to the birth at once (a track's identity never changes during its life) and
@@ -68,6 +69,7 @@ static void record_of(const mvt_track_t *tr, int64_t until_us, mvt_lost_t *r)
     }
     r->x[2] = tr->seen_z;
     r->P[8] = tr->seen_zz;
+    r->app = tr->app;
 }
 
 void mvt_trk_lose(mvt_tracker_t *self, const mvt_track_t *tr, int64_t now_us)
@@ -99,9 +101,10 @@ void mvt_trk_confirm(mvt_tracker_t *self, mvt_track_t *tr)
     }
 }
 
-/* d^2 of a birth at x (covariance cov) from record r at now_us (the test above), < 0 if singular. */
-static mvt_real record_d2(const mvt_tracker_t *self, const mvt_lost_t *r, const mvt_real x[3], const mvt_real cov[9],
-                          int64_t now_us)
+/* The test above for a birth at x (covariance cov, colour obs) and record r at now_us: 0 when out of
+ * reach (or singular), else 1 and in *score the d^2 plus the colour's -2 ln LR (may be < 0). */
+static int record_test(const mvt_tracker_t *self, const mvt_lost_t *r, const mvt_real x[3], const mvt_real cov[9],
+                       const mvt_app_obs_t *obs, int64_t now_us, mvt_real *score)
 {
     const mvt_real v = self->cfg.init_vel_std_ms;
     const mvt_real dt = mvt_us_to_s(now_us - r->lost_us);
@@ -110,12 +113,19 @@ static mvt_real record_d2(const mvt_tracker_t *self, const mvt_lost_t *r, const 
     P[0] += v * v * dt * dt; /* + W */
     P[4] += v * v * dt * dt;
     P[8] += MVT_TRK_HEAD_SD_M * MVT_TRK_HEAD_SD_M;
-    return mvt_trk_mahalanobis3(r->x, P, x, cov);
+    const mvt_real d2 = mvt_trk_mahalanobis3(r->x, P, x, cov);
+    if (!(d2 >= MVT_R(0.0)) || d2 > MVT_TRK_GATE3) {
+        return 0;
+    }
+    /* the colour ranks the records in reach (-2 ln LR of the birth's detections against the record's
+     * appearance); it does not refuse one: a birth's blobs in a crowd often mix two people's colour */
+    *score = d2 + mvt_trk_app_obs_cost(&r->app, obs);
+    return 1;
 }
 
 /* The record nearest a birth at x within the gate (its d^2 in *d2), or -1. */
-static int nearest_record(const mvt_tracker_t *self, const mvt_real x[3], const mvt_real cov[9], int64_t now_us,
-                          mvt_real *d2_out)
+static int nearest_record(const mvt_tracker_t *self, const mvt_real x[3], const mvt_real cov[9],
+                          const mvt_app_obs_t *obs, int64_t now_us, mvt_real *d2_out)
 {
     int best = -1;
     mvt_real best_d2 = MVT_TRK_GATE3;
@@ -124,8 +134,8 @@ static int nearest_record(const mvt_tracker_t *self, const mvt_real x[3], const 
         if (r->id == 0 || r->until_us < now_us) {
             continue;
         }
-        const mvt_real d2 = record_d2(self, r, x, cov, now_us);
-        if (d2 >= MVT_R(0.0) && d2 <= best_d2) {
+        mvt_real d2;
+        if (record_test(self, r, x, cov, obs, now_us, &d2) && (best < 0 || d2 < best_d2)) {
             best_d2 = d2;
             best = i;
         }
@@ -134,7 +144,8 @@ static int nearest_record(const mvt_tracker_t *self, const mvt_real x[3], const 
     return best;
 }
 
-void mvt_trk_release_contradicted(mvt_tracker_t *self, const mvt_real x[3], const mvt_real cov[9], int64_t now_us)
+void mvt_trk_release_contradicted(mvt_tracker_t *self, const mvt_real x[3], const mvt_real cov[9],
+                                  const mvt_app_obs_t *obs, int64_t now_us)
 {
     if (!(self->cfg.recover_s > MVT_R(0.0))) {
         return;
@@ -148,14 +159,14 @@ void mvt_trk_release_contradicted(mvt_tracker_t *self, const mvt_real x[3], cons
         }
         mvt_lost_t r;
         record_of(tr, now_us, &r);
-        const mvt_real d2 = record_d2(self, &r, x, cov, now_us);
-        if (d2 >= MVT_R(0.0) && d2 <= best_d2) {
+        mvt_real d2;
+        if (record_test(self, &r, x, cov, obs, now_us, &d2) && (best < 0 || d2 < best_d2)) {
             best_d2 = d2;
             best = t;
         }
     }
     mvt_real rec_d2;
-    if (best < 0 || (nearest_record(self, x, cov, now_us, &rec_d2) >= 0 && rec_d2 < best_d2)) {
+    if (best < 0 || (nearest_record(self, x, cov, obs, now_us, &rec_d2) >= 0 && rec_d2 < best_d2)) {
         return; /* none in reach, or a deleted track's record is nearer: recovery gives that one */
     }
     mvt_track_t *tr = &self->tracks[best];
@@ -165,11 +176,11 @@ void mvt_trk_release_contradicted(mvt_tracker_t *self, const mvt_real x[3], cons
     self->counters.deletions++;
 }
 
-int32_t mvt_trk_recover(mvt_tracker_t *self, const mvt_real x[3], const mvt_real cov[9], int64_t now_us,
-                        mvt_lost_t *held)
+int32_t mvt_trk_recover(mvt_tracker_t *self, const mvt_real x[3], const mvt_real cov[9], const mvt_app_obs_t *obs,
+                        int64_t now_us, mvt_lost_t *held)
 {
     mvt_real d2;
-    const int best = nearest_record(self, x, cov, now_us, &d2);
+    const int best = nearest_record(self, x, cov, obs, now_us, &d2);
     if (best < 0) {
         return 0;
     }

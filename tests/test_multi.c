@@ -360,10 +360,10 @@ static int32_t contradicted_then_born(int contradicted, const mvt_real at[3], mv
     tr->last_update_us = t - 200000;
     tr->last_consistent_us = contradicted ? t - 120000 : t; /* ... and its place seen empty */
     const mvt_real cov[9] = {0.0004f, 0, 0, 0, 0.0004f, 0, 0, 0, 0.0009f};
-    mvt_trk_release_contradicted(&g_tracker, at, cov, t);
+    mvt_trk_release_contradicted(&g_tracker, at, cov, NULL, t);
     *alive = tr->id == id;
     mvt_lost_t held;
-    const int32_t got = mvt_trk_recover(&g_tracker, at, cov, t, &held);
+    const int32_t got = mvt_trk_recover(&g_tracker, at, cov, NULL, t, &held);
     assert_true(got == 0 || got == id);
     return got;
 }
@@ -379,6 +379,178 @@ static void test_mvt_tracker_contradicted_track_gives_identity_to_rebirth(void *
     assert_true(contradicted_then_born(1, shorter, 3.0f, &alive) == 0 && alive);
     assert_true(contradicted_then_born(1, far, 3.0f, &alive) == 0 && alive);
     assert_true(contradicted_then_born(1, same, 0.0f, &alive) == 0 && alive); /* recovery off */
+}
+
+/* The appearance model (mvt_trk_app.c) against a double-precision computation of its formulas:
+ * it learns a person's colour and spread from detections of which a fifth carry other colours
+ * (merged blobs, fragments), and an odd colour costs at most -2 ln MVT_TRK_APP_OUTLIER. */
+static void test_mvt_trk_app_learns_colour_bounds_outliers(void **state)
+{
+    (void)state;
+    mvt_detection_t det = {0};
+    mvt_real a[2];
+    det.hue = 0.25f;
+    det.saturation = 0.5f;
+    assert_true(mvt_trk_chroma(&det, a));
+    assert_true(fabs(a[0]) < 1e-6 && fabs(a[1] - 0.5) < 1e-6);
+    const mvt_real bad[5][2] = {{-1, 0.5f}, {0.3f, -1}, {NAN, 0.5f}, {0.3f, 1.5f}, {0.3f, INFINITY}};
+    for (int i = 0; i < 5; i++) {
+        det.hue = bad[i][0];
+        det.saturation = bad[i][1];
+        assert_false(mvt_trk_chroma(&det, a));
+    }
+    mvt_app_t app;
+    mvt_trk_app_reset(&app);
+    const mvt_real probe[2] = {0.1f, 0.1f};
+    assert_true(mvt_trk_app_cost(&app, probe) == 0 && mvt_trk_app_cost_min(&app) == 0); /* unknown: no evidence */
+    test_rng_t rng = {5};
+    const double mx = 0.4, my = -0.3, sd = 0.1;
+    for (int i = 0; i < 2000; i++) {
+        if (i % 5 == 4) { /* someone else's colour, anywhere in the disc */
+            const double r = sqrt(test_uniform(&rng)), th = 6.283185307179586 * test_uniform(&rng);
+            a[0] = (mvt_real)(r * cos(th));
+            a[1] = (mvt_real)(r * sin(th));
+        } else {
+            a[0] = (mvt_real)(mx + sd * test_normal(&rng));
+            a[1] = (mvt_real)(my + sd * test_normal(&rng));
+        }
+        mvt_trk_app_update(&app, a);
+    }
+    assert_true(mvt_trk_app_ok(&app));
+    assert_true(fabs(app.m[0] - mx) < 0.03 && fabs(app.m[1] - my) < 0.03);
+    assert_true(sqrt(app.var) > 0.07 && sqrt(app.var) < 0.13); /* the person's spread, not the outliers' */
+    assert_true(app.n <= MVT_TRK_APP_NMAX);
+    /* the cost against the formula in double */
+    const double V = (double)app.var * (1.0 + 1.0 / (double)app.n), eps = (double)MVT_TRK_APP_OUTLIER;
+    const mvt_real pts[3][2] = {{0.4f, -0.3f}, {0.5f, -0.2f}, {-0.6f, 0.6f}};
+    for (int i = 0; i < 3; i++) {
+        const double dx = pts[i][0] - app.m[0], dy = pts[i][1] - app.m[1];
+        const double lr = (1 - eps) * exp(-0.5 * (dx * dx + dy * dy) / V) / (2 * V) + eps;
+        assert_true(fabs(mvt_trk_app_cost(&app, pts[i]) - (-2 * log(lr))) < 1e-3);
+    }
+    assert_true(fabs(mvt_trk_app_cost_min(&app) - (-2 * log((1 - eps) / (2 * V) + eps))) < 1e-3);
+    assert_true(mvt_trk_app_cost(&app, pts[2]) <= -2 * log(eps) + 1e-4); /* bounded */
+    assert_true(mvt_trk_app_cost(&app, pts[2]) > mvt_trk_app_cost(&app, pts[1]));
+    mvt_app_obs_t obs = {.n = 2, .a = {{0.4f, -0.3f}, {-0.6f, 0.6f}}};
+    assert_true(fabs(mvt_trk_app_obs_cost(&app, &obs) - (mvt_trk_app_cost(&app, obs.a[0]) +
+                                                        mvt_trk_app_cost(&app, obs.a[1]))) < 1e-5);
+    assert_true(mvt_trk_app_obs_cost(&app, NULL) == 0);
+}
+
+/* Two people 0.6 m apart, one in red and one in blue, seen by 5 cameras. Then camera 0 shows only
+ * one blob, blue, a little nearer the red person's prediction, with a pixel noise that puts it in
+ * both gates. Geometry gives it to the red track; the colour gives it to the blue one. Without
+ * colour (hue -1) or in red, the red track takes it. Returns the track updated by camera 0: 1 red,
+ * 2 blue, 0 none. */
+static int colour_decides(mvt_real hue, mvt_real sat)
+{
+    init();
+    test_rng_t rng = {23};
+    const mvt_real X[2][3] = {{3.19f, 2.27f, 1.7f}, {2.81f, 2.73f, 1.7f}};
+    const mvt_real col[2][2] = {{0.0f, 0.8f}, {0.62f, 0.7f}}; /* red, blue: hue, saturation */
+    int64_t t = 1000000;
+    for (int f = 0; f < 40; f++, t += 40000) {
+        frame_of(X, 2, t, &rng, 2.0, 0);
+        for (int k = 0; k < 5; k++) {
+            for (int i = 0; i < g_frame.views[k].num_detections; i++) {
+                mvt_detection_t *d = &g_frame.views[k].det[i];
+                const int who = i; /* frame_of adds the people in order, none outside the picture here */
+                d->hue = col[who][0] + (mvt_real)(0.01 * test_normal(&rng));
+                d->hue = d->hue < 0 ? d->hue + 1 : d->hue;
+                d->saturation = col[who][1] + (mvt_real)(0.03 * test_normal(&rng));
+            }
+            assert_int_equal(g_frame.views[k].num_detections, 2);
+        }
+        assert_int_equal(mvt_tracker_step(&g_tracker, &g_frame, &g_out), MVT_OK);
+    }
+    const int32_t red = id_near(X[0]), blue = id_near(X[1]);
+    assert_true(red > 0 && blue > 0 && red != blue);
+    /* the frame: cameras 1-4 as before, camera 0 one blob 45 % of the way from the red head to the blue */
+    frame_of(X, 2, t, &rng, 2.0, 0);
+    for (int k = 1; k < 5; k++) {
+        for (int i = 0; i < 2; i++) {
+            g_frame.views[k].det[i].hue = col[i][0];
+            g_frame.views[k].det[i].saturation = col[i][1];
+        }
+    }
+    mvt_real ur[2], ub[2];
+    assert_int_equal(mvt_cam_project(&g_cams[0], X[0], ur, NULL), MVT_OK);
+    assert_int_equal(mvt_cam_project(&g_cams[0], X[1], ub, NULL), MVT_OK);
+    const double sep = hypot(ur[0] - ub[0], ur[1] - ub[1]);
+    assert_true(sep > 40.0); /* resolved in camera 0: the two are not one blob there */
+    mvt_view_t *v = &g_frame.views[0];
+    v->num_detections = 1;
+    v->det[0].u = ur[0] + 0.45f * (ub[0] - ur[0]);
+    v->det[0].v = ur[1] + 0.45f * (ub[1] - ur[1]);
+    v->det[0].sigma_px = (mvt_real)(0.8 * sep); /* a poorly placed blob: inside both gates */
+    v->det[0].hue = hue;
+    v->det[0].saturation = sat;
+    assert_int_equal(mvt_tracker_step(&g_tracker, &g_frame, &g_out), MVT_OK);
+    int who = 0;
+    for (int i = 0; i < g_out.num_tracks; i++) {
+        if (g_out.tracks[i].cameras_used & 1u) {
+            assert_int_equal(who, 0);
+            who = g_out.tracks[i].id == red ? 1 : g_out.tracks[i].id == blue ? 2 : 3;
+        }
+    }
+    /* the tracks report their colour (CONTRACT track_t hue, saturation) */
+    for (int i = 0; i < g_out.num_tracks; i++) {
+        const int is_red = g_out.tracks[i].id == red;
+        const double dh = fabs(g_out.tracks[i].hue - col[is_red ? 0 : 1][0]);
+        assert_true(fmin(dh, 1 - dh) < 0.03 && fabs(g_out.tracks[i].saturation - col[is_red ? 0 : 1][1]) < 0.06);
+    }
+    return who;
+}
+
+static void test_mvt_tracker_colour_decides_between_close_people(void **state)
+{
+    (void)state;
+    assert_int_equal(colour_decides(0.62f, 0.7f), 2); /* blue: the blue track */
+    assert_int_equal(colour_decides(-1.0f, -1.0f), 1); /* no colour: geometry, the nearer red one */
+    assert_int_equal(colour_decides(0.0f, 0.8f), 1);   /* red: the red track */
+}
+
+/* Two people lost 0.5 m apart, one in red and one in blue; a person born between them, a little
+ * nearer the red one's place, in blue, takes the blue identity; without colour, the red one (the
+ * nearer); in red, the red one. */
+static int32_t reborn_between(const mvt_app_obs_t *obs)
+{
+    init();
+    const int64_t now = 5000000;
+    const mvt_real col[2][2] = {{0.56f, 0.0f}, {-0.44f, -0.49f}}; /* red (hue 0), blue (hue 0.62) chroma */
+    for (int i = 0; i < 2; i++) {
+        mvt_lost_t *r = &g_tracker.lost[i];
+        memset(r, 0, sizeof(*r));
+        r->id = 10 + i;
+        r->lost_us = now - 400000;
+        r->until_us = now + 2000000;
+        r->x[0] = 3.0f + 0.5f * (mvt_real)i;
+        r->x[1] = 2.5f;
+        r->x[2] = 1.7f;
+        r->P[0] = r->P[4] = 0.01f;
+        r->P[8] = 0.0004f;
+        mvt_trk_app_reset(&r->app);
+        r->app.m[0] = col[i][0];
+        r->app.m[1] = col[i][1];
+        r->app.var = 0.01f;
+        r->app.n = 100;
+    }
+    g_tracker.next_id = 20;
+    const mvt_real at[3] = {3.2f, 2.5f, 1.7f}, cov[9] = {0.0004f, 0, 0, 0, 0.0004f, 0, 0, 0, 0.0009f};
+    mvt_lost_t held;
+    return mvt_trk_recover(&g_tracker, at, cov, obs, now, &held);
+}
+
+static void test_mvt_tracker_recovery_prefers_same_colour(void **state)
+{
+    (void)state;
+    const mvt_app_obs_t blue = {.n = 3, .a = {{-0.44f, -0.49f}, {-0.40f, -0.52f}, {-0.47f, -0.45f}}};
+    const mvt_app_obs_t red = {.n = 2, .a = {{0.56f, 0.02f}, {0.52f, -0.03f}}};
+    const mvt_app_obs_t none = {.n = 0};
+    assert_int_equal(reborn_between(&blue), 11);
+    assert_int_equal(reborn_between(&none), 10);
+    assert_int_equal(reborn_between(NULL), 10);
+    assert_int_equal(reborn_between(&red), 10);
 }
 
 static void test_mvt_tracker_step_false_alarm_flood_confirmed_tracks_survive(void **state)
@@ -812,6 +984,9 @@ int main(void)
         cmocka_unit_test(test_mvt_tracker_step_person_lost_and_back_keeps_identity),
         cmocka_unit_test(test_mvt_tracker_select_under_capacity_keeps_all_in_order),
         cmocka_unit_test(test_mvt_tracker_step_hidden_in_group_keeps_identity),
+        cmocka_unit_test(test_mvt_trk_app_learns_colour_bounds_outliers),
+        cmocka_unit_test(test_mvt_tracker_colour_decides_between_close_people),
+        cmocka_unit_test(test_mvt_tracker_recovery_prefers_same_colour),
         cmocka_unit_test(test_mvt_tracker_step_vanished_person_contradicted_deleted),
         cmocka_unit_test(test_mvt_tracker_step_ghost_two_views_refuted_by_three),
         cmocka_unit_test(test_mvt_tracker_step_camera_that_cannot_see_does_not_update),

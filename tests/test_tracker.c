@@ -393,8 +393,9 @@ static void test_mvt_tracker_resume_continues_and_refuses_bad_state(void **state
     while (g_saved.tracks[live].id == 0) live++;
     const mvt_lost_t kept = {.id = 1000, .lost_us = g_saved.last_utime_us - 200000,
                              .until_us = g_saved.last_utime_us + 2000000, .x = {3, 2, 1.7f},
-                             .P = {0.01f, 0, 0, 0, 0.01f, 0, 0, 0, 0.001f}};
-    for (int c = 0; c < 16; c++) {
+                             .P = {0.01f, 0, 0, 0, 0.01f, 0, 0, 0, 0.001f},
+                             .app = {.m = {0.3f, -0.2f}, .var = 0.01f, .n = 40}};
+    for (int c = 0; c < 19; c++) {
         mvt_tracker_save(&g_tracker2, &g_saved);
         g_bad = g_saved;
         mvt_track_t *tr = &g_bad.tracks[live];
@@ -413,6 +414,9 @@ static void test_mvt_tracker_resume_continues_and_refuses_bad_state(void **state
         case 13: tr->seen_zz = NAN; break;                       /* nor a track's last-seen height */
         case 14: g_bad.birth_rate = NAN; break;                  /* a birth rate that is no number */
         case 15: g_bad.birth_rate_us = g_bad.last_utime_us + 1; break; /* or after the clock */
+        case 16: tr->app.m[0] = NAN; break;                      /* a colour that is no number, */
+        case 17: tr->app.m[1] = 1.5f; break;                     /* outside the chroma disc, */
+        case 18: g_bad.lost[3].app.var = 0; break;               /* a record's spread of 0 */
         case 0: tr->s.x[1] = NAN; break;
         case 1: tr->s.P[7] = -1.0f; break;                       /* variance of y negative */
         case 2: tr->s.P[1] = 5.0f; break;                        /* not symmetric */

@@ -93,6 +93,20 @@ def test_pf_interaction_two_identities_deterministic(daemon_path, tmp_path):
     assert st.mode == "pf" and st.masks_decoded > 0 and st.masks_rejected == 0
     t = next(t for ts in tr.tracks.values() for t in ts if t.status == 2)
     assert 0.0 <= t.hue < 1.0 and 0.0 <= t.saturation <= 1.0  # MS+C estimates appearance
+    # --mode pkf on the same blobs learns each person's colour from theirs: the two people's tracks
+    # report colours that differ (their clothes do), and each stays what it was
+    pk = tmp_path / "pkf.lcm"
+    run(daemon_path, tmp_path / "rig.yaml", log, pk, "--mode", "pkf")
+    tk = read_log(str(pk), lambda c: c == "TRACKS")
+    chroma = {}
+    for u in sorted(tk.tracks)[len(tk.tracks) // 2:]:
+        for t in tk.tracks[u]:
+            if t.status == 2:
+                assert 0.0 <= t.hue < 1.0 and 0.0 <= t.saturation <= 1.0
+                chroma.setdefault(t.id, []).append(t.saturation * np.exp(2j * np.pi * t.hue))
+    assert len(chroma) == 2, list(chroma)
+    a, b = (np.array(v) for v in chroma.values())
+    assert abs(a.mean() - b.mean()) > 0.1 and np.abs(a - a.mean()).max() < 0.1 and np.abs(b - b.mean()).max() < 0.1
     # --state: the log cut in two at frame 100, the second half restored from the first's checkpoint
     # (particles, random stream, identities): the whole run's tracks, bit for bit
     from mvtrack_tools.lcmio import split_log
