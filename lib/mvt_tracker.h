@@ -321,6 +321,7 @@ typedef struct mvt_tracker {
     uint8_t meas_ok[MVT_MAX_CAMERAS][MVT_MAX_DETECTIONS];
     mvt_real chroma[MVT_MAX_CAMERAS][MVT_MAX_DETECTIONS][2]; /* the detection's colour (mvt_app_t) */
     uint8_t chroma_ok[MVT_MAX_CAMERAS][MVT_MAX_DETECTIONS];  /* ... sent and valid */
+    mvt_real app_shift[MVT_MAX_TARGETS];  /* the least colour cost of each track (mvt_trk_assoc.c) */
     uint8_t used[MVT_MAX_CAMERAS][MVT_MAX_DETECTIONS];
     int num_meas[MVT_MAX_CAMERAS];
     mvt_real cost[MVT_MAX_TARGETS][MVT_MAX_DETECTIONS]; /* < 0: outside the gate */

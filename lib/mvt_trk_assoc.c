@@ -41,9 +41,8 @@ static mvt_real app_cost(const mvt_tracker_t *self, int k, int t, int d)
     if (self->cfg.gate == MVT_GATE_PAPER) {
         return MVT_R(0.0);
     }
-    const mvt_app_t *app = &self->tracks[t].app;
-    const int usable = self->chroma_ok[k][d] && self->merge_nb[t] < 0;
-    return (usable ? mvt_trk_app_cost(app, self->chroma[k][d]) : MVT_R(0.0)) - mvt_trk_app_cost_min(app);
+    const int usable = self->chroma_ok[k][d] && self->merge_nb[t] < 0 && self->tracks[t].app.n > MVT_R(0.0);
+    return (usable ? mvt_trk_app_cost(&self->tracks[t].app, self->chroma[k][d]) : MVT_R(0.0)) - self->app_shift[t];
 }
 
 /* The cost of track t missing this view: the gate (a detection inside it is likelier the track's
@@ -55,7 +54,7 @@ static mvt_real miss_cost(const mvt_tracker_t *self, int t)
     if (c->gate == MVT_GATE_PAPER) {
         return c->paper_delta;
     }
-    return c->gate_chi2 - mvt_trk_app_cost_min(&self->tracks[t].app);
+    return c->gate_chi2 - self->app_shift[t];
 }
 
 /* Squared image distance between two predictions and the squared merge radius in pixels. */
@@ -122,31 +121,45 @@ static int in_picture(const mvt_camera_t *cam, const mvt_pkf_pred_t *p)
  * (merge_nb) stand in for this. Measured on the masks' connected components (crowd, 3 seeds),
  * judged against the ground truth where the colour changed an assignment: without this rule the
  * colour was right 189 times and wrong 186, with it right 192 and wrong 174. */
-static int blob_holds_two(const mvt_tracker_t *self, const mvt_view_t *view, int k, int d, const int live[],
-                          int n_live)
+static int blob_holds_two(const mvt_view_t *view, int d, const mvt_real heads[][4], int n_heads)
 {
     const mvt_real *b = view->det[d].box;
-    if (!(isfinite(b[0]) && isfinite(b[1]) && isfinite(b[2]) && isfinite(b[3]) && b[2] > b[0] && b[3] > b[1])) {
+    if (n_heads < 2 ||
+        !(isfinite(b[0]) && isfinite(b[1]) && isfinite(b[2]) && isfinite(b[3]) && b[2] > b[0] && b[3] > b[1])) {
         return 0;
     }
+    int n = 0;
+    for (int i = 0; i < n_heads && n < 2; i++) {
+        const mvt_real *h = heads[i]; /* u, v and their margins */
+        n += h[0] >= b[0] - h[2] && h[0] <= b[2] + h[2] && h[1] >= b[1] - h[3] && h[1] <= b[3] + h[3];
+    }
+    return n >= 2;
+}
+
+/* The predicted heads of the seen (confirmed or coasting) tracks in camera k, raw pixels, with three
+ * standard deviations of the prediction and the pixel noise: [u, v, margin u, margin v]. */
+static int seen_heads(const mvt_tracker_t *self, int k, const int live[], int n_live, mvt_real heads[][4])
+{
     const mvt_camera_t *cam = &self->cams[k];
     int n = 0;
-    for (int i = 0; i < n_live && n < 2; i++) {
+    for (int i = 0; i < n_live; i++) {
         const int t = live[i];
         const mvt_track_t *tr = &self->tracks[t];
         if (!self->pred_ok[t] || tr->status == MVT_TRACK_TENTATIVE) {
             continue;
         }
         const mvt_pkf_pred_t *p = &self->pred[t];
-        mvt_real uv[2] = {p->h[0], p->h[1]};
-        if (p->lin != MVT_PKF_JACOBIAN && mvt_cam_project(cam, tr->s.x, uv, NULL) != MVT_OK) {
+        mvt_real *h = heads[n];
+        h[0] = p->h[0];
+        h[1] = p->h[1];
+        if (p->lin != MVT_PKF_JACOBIAN && mvt_cam_project(cam, tr->s.x, h, NULL) != MVT_OK) {
             continue;
         }
-        const mvt_real su = MVT_R(3.0) * MVT_SQRT(p->hph[0] + cam->sigma_px * cam->sigma_px);
-        const mvt_real sv = MVT_R(3.0) * MVT_SQRT(p->hph[2] + cam->sigma_px * cam->sigma_px);
-        n += uv[0] >= b[0] - su && uv[0] <= b[2] + su && uv[1] >= b[1] - sv && uv[1] <= b[3] + sv;
+        h[2] = MVT_R(3.0) * MVT_SQRT(p->hph[0] + cam->sigma_px * cam->sigma_px);
+        h[3] = MVT_R(3.0) * MVT_SQRT(p->hph[2] + cam->sigma_px * cam->sigma_px);
+        n++;
     }
-    return n >= 2;
+    return n;
 }
 
 static void hypothesise(mvt_tracker_t *self, const mvt_view_t *view, int k, const int live[], int n_live)
@@ -204,11 +217,14 @@ static void hypothesise(mvt_tracker_t *self, const mvt_view_t *view, int k, cons
             self->merge_cov[t][2] = dy * dy * third;
         }
     }
-    for (int d = 0; d < nd; d++) {
-        if (self->chroma_ok[k][d] && blob_holds_two(self, view, k, d, live, n_live)) {
-            self->chroma_ok[k][d] = 0;
-        }
+    for (int i = 0; i < n_live; i++) { /* the colour's shift (app_cost), once per track and camera */
+        self->app_shift[live[i]] = mvt_trk_app_cost_min(&self->tracks[live[i]].app);
     }
+    mvt_real heads[MVT_MAX_TARGETS][4];
+    const int n_heads = seen_heads(self, k, live, n_live, heads);
+    uint8_t two_checked[MVT_MAX_DETECTIONS]; /* blob_holds_two asked of detection d yet (lazily: only
+                                                 gated detections' colour is used) */
+    memset(two_checked, 0, sizeof(two_checked));
     for (int i = 0; i < n_live; i++) {
         const int t = live[i];
         const int tentative = self->tracks[t].status == MVT_TRACK_TENTATIVE;
@@ -229,6 +245,12 @@ static void hypothesise(mvt_tracker_t *self, const mvt_view_t *view, int k, cons
                             cost = dist;
                         }
                     } else if (in.d2 <= c->gate_chi2) {
+                        if (self->chroma_ok[k][d] && !two_checked[d]) {
+                            two_checked[d] = 1;
+                            if (blob_holds_two(view, d, (const mvt_real(*)[4])heads, n_heads)) {
+                                self->chroma_ok[k][d] = 0;
+                            }
+                        }
                         cost = in.d2 + app_cost(self, k, t, d);
                         const mvt_real det = in.S[0] * in.S[2] - in.S[1] * in.S[1];
                         if (tentative && det > MVT_R(0.0)) {
