@@ -164,6 +164,10 @@ typedef struct mvt_view {
     int observed;         /* 0: the camera did not report (not observed, not "saw nothing") */
     int64_t utime_us;     /* capture time */
     int num_detections;   /* 0..MVT_MAX_DETECTIONS (larger is counted and clamped) */
+    int num_offered;      /* how many the camera sent, when the caller kept num_detections of them
+                             (mvt_tracker_select); <= num_detections: none dropped. The view's
+                             clutter density counts them all: the kept ones are each track's nearest,
+                             so a flood's density must not be read from what was kept */
     mvt_detection_t det[MVT_MAX_DETECTIONS];
     const struct mvt_mask *mask; /* foreground mask and colour, or NULL; owned by the caller and
                                     valid until the frame is processed (used by mvt_pft only) */

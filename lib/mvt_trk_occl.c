@@ -86,6 +86,9 @@ void mvt_trk_evidence_weights(mvt_tracker_t *self, const mvt_frame_t *frame)
                 self->ev_boxes[k] = 1;
             }
         }
+        if (view->observed && view->num_offered > self->num_meas[k]) {
+            n += view->num_offered - self->num_meas[k]; /* dropped by the caller: clutter all the same */
+        }
         const mvt_real q_match = clamp_q(MVT_R(1.0) - MVT_EXP(-(mvt_real)n * MVT_R(3.14159265) * r * r / area));
         /* a person is detected (p_detect) or, missed, matched by clutter anyway; nobody is matched
          * by clutter only. A place looks empty when nothing covers it: with a person there only if

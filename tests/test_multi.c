@@ -596,6 +596,7 @@ static void test_mvt_tracker_step_false_alarm_flood_confirmed_tracks_survive(voi
                 v->det[i] = g_flood[keep[i]];
             }
             v->num_detections = kept;
+            v->num_offered = n;
         }
         assert_int_equal(mvt_tracker_step(&g_tracker, &g_frame, &g_out), MVT_OK);
         assert_true(g_out.num_tracks <= MVT_MAX_TARGETS);

@@ -150,11 +150,12 @@ def test_daemon_multi_person_on_rigs_built_differently(tmp_path, daemon_path, n_
 
 
 @pytest.mark.daemon
-def test_daemon_false_alarm_flood_counted_tracks_kept(tmp_path, daemon_path):
+@pytest.mark.parametrize("seed", [3, 6, 8, 9])
+def test_daemon_false_alarm_flood_counted_tracks_kept(tmp_path, daemon_path, seed):
     rig = smartroom()
     rp = tmp_path / "rig.yaml"
     rig.write(rp)
-    rng = np.random.default_rng(3)
+    rng = np.random.default_rng(seed)
     people = np.array([[1.5, 1.5, 1.7], [4.0, 3.5, 1.8]])
     log = tmp_path / "flood.lcm"
     w = LogWriter(str(log))
@@ -179,11 +180,13 @@ def test_daemon_false_alarm_flood_counted_tracks_kept(tmp_path, daemon_path):
     # the two people keep their identities through the flood
     assert res.id_switches == 0 and res.misses <= 10, res
     # a tentative track is confirmed only when its detections are 99 times likelier from a person
-    # than from the view's clutter (mvt_trk_delete, the existence test), and the prior odds of a new
-    # track fall with the number of tracks tried at once (mvt_trk_init, birth_prior): the flood's
-    # random agreements confirmed 56 ghost tracks (2,006 false-positive frames) with neither, 4
-    # (213) with the test alone, none with both. Other floods of this kind still confirm 0-2
-    # (docs/tracking.md, Lifecycle)
+    # than from the view's clutter (mvt_trk_delete, the existence test), the prior odds of a new
+    # track fall with the number of tracks tried at once (mvt_trk_init, birth_prior), and the
+    # clutter density counts the detections the daemon dropped over capacity (mvt_view_t
+    # num_offered: the kept ones are each track's nearest, so the density of what was kept made a
+    # ghost's random detections look 4.7 times likelier than clutter). Seed 3's random agreements
+    # confirmed 56 ghost tracks with none of the three, 4 with the test alone; seeds 6, 8 and 9
+    # confirmed 2 each before the third (docs/tracking.md, Lifecycle)
     ghosts = {t.id for v in tr.tracks.values() for t in v if t.status in (2, 3)} - {1, 2}
     assert not ghosts and res.false_positives == 0, (ghosts, res)
     assert max(len(v) for v in tr.tracks.values()) <= 32
