@@ -72,12 +72,13 @@ def seeds_of(text: str) -> list[int]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="mvtrack flood", description=__doc__.split("\n\n")[0],
-                                 formatter_class=argparse.RawDescriptionHelpFormatter, epilog=__doc__)
+    head, _, rest = __doc__.partition("\n\n")
+    ap = argparse.ArgumentParser(prog="mvtrack flood", description=head,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter, epilog=rest)
     ap.add_argument("--seeds", default="4-19", help="seeds: 4-19, 3,6,8 or 5 (default 4-19)")
     ap.add_argument("--false-alarms", type=int, default=300, help="per camera and frame (default 300)")
     ap.add_argument("--daemon-args", default="", help="more mvtrackd options, e.g. '--motion cv'")
-    ap.add_argument("--out", type=Path, default=REPO / "out/flood")
+    ap.add_argument("--out", type=Path, default=REPO / "out/flood", help="output folder (default out/flood)")
     a = ap.parse_args(argv)
     try:
         seeds = seeds_of(a.seeds)
