@@ -14,6 +14,9 @@
  *   filter_update_5cam_imm     the IMM step (mvt_imm, default 3-model bank): mixing, prediction,
  *                              5 cameras projected at the combination and applied to every model
  *   filter_update_5cam_imm.eigen_tuned  the same IMM step in the tuned peer's style
+ *   NAME.vs_single, NAME.vs_eigen_tuned  mvtrack's step over the single-model step or over the
+ *                              tuned peer's, timed in alternating blocks (robust to the machine's
+ *                              speed, which can swing 30 % between two separate runs)
  *   tracker_frame_5cam_1target a whole mvt_tracker_step: 5 cameras, one person, one detection each
  *   tracker_frame_8cam_16people  a whole mvt_tracker_step: 8 cameras around an 8 x 7 m room, 16
  *                              people walking circles at 0.6-1.2 m/s, 2 px noise, 10 % misses,
@@ -60,6 +63,32 @@ void measure(const char *name, int iters, int runs, F &&step)
     std::sort(ns.begin(), ns.end());
     std::printf("{\"bench\": \"%s\", \"median_ns\": %.1f, \"min_ns\": %.1f, \"max_ns\": %.1f, \"runs\": %d, \"iters\": %d}\n",
                 name, ns[ns.size() / 2], ns.front(), ns.back(), runs, iters);
+    std::fflush(stdout);
+}
+
+/* Two steps timed in alternating blocks (a, b, a, b, ...), so that both see the same machine: on
+ * a shared or frequency-scaling machine the medians of two separate runs can differ by 30 % for
+ * the same code. Prints the median and range of the per-pair ratios b / a. */
+template <class A, class B>
+void measure_ratio(const char *name, int iters, int runs, A &&a, B &&b)
+{
+    std::vector<double> r;
+    for (int w = 0; w < iters / 10; w++) {
+        a(w);
+        b(w);
+    }
+    for (int k = 0; k < runs; k++) {
+        const auto t0 = std::chrono::steady_clock::now();
+        for (int i = 0; i < iters; i++) a(i);
+        const auto t1 = std::chrono::steady_clock::now();
+        for (int i = 0; i < iters; i++) b(i);
+        const auto t2 = std::chrono::steady_clock::now();
+        r.push_back(std::chrono::duration<double>(t2 - t1).count() / std::chrono::duration<double>(t1 - t0).count());
+    }
+    std::sort(r.begin(), r.end());
+    std::printf("{\"bench\": \"%s\", \"median_ratio\": %.3f, \"min_ratio\": %.3f, \"max_ratio\": %.3f, \"runs\": %d, "
+                "\"iters\": %d}\n",
+                name, r[r.size() / 2], r.front(), r.back(), runs, iters);
     std::fflush(stdout);
 }
 
@@ -211,6 +240,28 @@ struct EigenSeqFilter {
         P.triangularView<Eigen::StrictlyLower>() = P.transpose(); /* exactly symmetric, as mvtrack's */
         return -0.5f * y.dot(Si * y) - 0.5f * std::log(det);
     }
+    /* The IMM's update, as mvt_imm's pixel update: S = L D L^T, whitened rows v = L^-1 H P, the
+     * covariance less two rank-one terms; NX = 3 for a standing model (its P_pv is 0). Returns the
+     * log-likelihood as update(). */
+    template <int NX>
+    float update_ldl(const Eigen::Matrix<float, 2, 3> &J, const Eigen::Vector2f &y, float r, float eps, float clutter)
+    {
+        Eigen::Matrix<float, 2, NX> V = J * P.topLeftCorner<3, NX>();
+        const float s00 = V.row(0).template head<3>().dot(J.row(0)) + r;
+        const float s01 = V.row(0).template head<3>().dot(J.row(1));
+        const float s11 = V.row(1).template head<3>().dot(J.row(1)) + r;
+        const float i0 = 1 / s00, l = s01 * i0, d1 = s11 - l * s01, i1 = 1 / d1;
+        V.row(1) -= l * V.row(0);
+        const float z1 = y(1) - l * y(0);
+        /* robust, as mvt_imm: the detection is right with probability w */
+        const float g = std::exp(-0.5f * (y(0) * y(0) * i0 + z1 * z1 * i1)) * std::sqrt(i0 * i1) * 0.15915494f;
+        const float like = (1 - eps) * g + clutter, w = (1 - eps) * g / like;
+        const Eigen::Matrix<float, NX, 1> d = V.row(0).transpose() * (y(0) * i0) + V.row(1).transpose() * (z1 * i1);
+        x.head<NX>() += w * d;
+        P.topLeftCorner<NX, NX>().noalias() -= (w * i0 * V.row(0).transpose()) * V.row(0) +
+                                               (w * i1 * V.row(1).transpose()) * V.row(1) - (w * (1 - w) * d) * d.transpose();
+        return like;
+    }
     void step(float dt, const Eigen::Vector3f &q, const EigenCam *cams, const Eigen::Vector2f *z, float r)
     {
         predict_cv(dt, q);
@@ -223,7 +274,9 @@ struct EigenSeqFilter {
 };
 
 /* The same bank as mvt_imm_config_default in the tuned peer's style: mixing, per-model prediction,
- * each camera projected once at the combination, every model updated, combination. */
+ * each camera projected once at the combined position, every model updated (the same L D L^T form
+ * as mvt_imm, the standing model on its position rows, robust with the same p_outlier), one
+ * combination at the end. */
 struct EigenImm {
     int n = 3;
     EigenSeqFilter m[3];
@@ -231,6 +284,7 @@ struct EigenImm {
     float leave[3];
     Eigen::Vector3f q[3];
     bool still[3];
+    float eps = 0.1f, radius = 150.0f; /* p_outlier, outlier_radius_px */
     Vec6 xc;
     Mat6 Pc;
     void combine()
@@ -275,20 +329,20 @@ struct EigenImm {
                 m[j].predict_cv(dt, q[j]);
             }
         }
-        combine();
+        /* between cameras only the combined position is read (the next projection), as in mvt_imm */
         for (int k = 0; k < 5; k++) {
+            const Eigen::Vector3f pc = mu[0] * m[0].x.head<3>() + mu[1] * m[1].x.head<3>() + mu[2] * m[2].x.head<3>();
             Eigen::Matrix<float, 2, 3> J;
-            const Eigen::Vector2f h = cams[k].project(xc.head<3>(), J);
-            float ll[3], best = -1e30f;
-            for (int j = 0; j < n; j++) {
-                ll[j] = m[j].update(J, z[k] - h - J * (m[j].x.head<3>() - xc.head<3>()), r);
-                best = std::max(best, ll[j]);
-            }
+            const Eigen::Vector2f h = cams[k].project(pc, J);
+            const float clutter = eps / (3.14159265f * radius * radius);
             float sum = 0;
-            for (int j = 0; j < n; j++) sum += (mu[j] *= std::exp(ll[j] - best));
+            for (int j = 0; j < n; j++) {
+                const Eigen::Vector2f y = z[k] - h - J * (m[j].x.head<3>() - pc);
+                sum += (mu[j] *= still[j] ? m[j].update_ldl<3>(J, y, r, eps, clutter) : m[j].update_ldl<6>(J, y, r, eps, clutter));
+            }
             for (int j = 0; j < n; j++) mu[j] /= sum;
-            combine();
         }
+        combine();
     }
 };
 
@@ -420,14 +474,15 @@ int main(int argc, char **argv)
         mvt_cv_init(&s, truth, cov, 0.25f, 0);
         mvt_pkf_meas_t m[5];
         for (int k = 0; k < 5; k++) mvt_pkf_meas_make(&rig.cams[k], uv[k], 3.0f, &m[k]);
-        measure("filter_update_5cam", 200000, runs, [&](int i) {
+        auto single_step = [&](int i) {
             mvt_cv_predict(&s, 0.04f, q);
             for (int k = 0; k < 5; k++) {
                 mvt_pkf_innov_t in;
                 if (mvt_pkf_innovation(&s, &rig.cams[k], MVT_PKF_JACOBIAN, &m[k], &in) == MVT_OK) mvt_pkf_update(&s, &in);
             }
             if ((i & 1023) == 0) g_sink += s.x[0];
-        });
+        };
+        measure("filter_update_5cam", 200000, runs, single_step);
         std::vector<EigenCam> ec;
         for (int k = 0; k < 5; k++) ec.emplace_back(rig.cams[k]);
         EigenFilter ef;
@@ -448,10 +503,12 @@ int main(int argc, char **argv)
         es.x << truth[0], truth[1], truth[2], 0, 0, 0;
         es.P = Mat6::Identity() * 1e-3f;
         es.P.bottomRightCorner<3, 3>() = Eigen::Matrix3f::Identity() * 0.25f;
-        measure("filter_update_5cam.eigen_tuned", 200000, runs, [&](int i) {
+        auto peer_step = [&](int i) {
             es.step(0.04f, qe, ec.data(), z, 9.0f);
             if ((i & 1023) == 0) g_sink += es.x(0);
-        });
+        };
+        measure("filter_update_5cam.eigen_tuned", 200000, runs, peer_step);
+        measure_ratio("filter_update_5cam.vs_eigen_tuned", 2000, 401, peer_step, single_step);
         std::fprintf(stderr, "# agreement after the run: |x_mvtrack - x_eigen_tuned| = %.3g m\n",
                      (double)(Eigen::Vector3f(s.x[0], s.x[1], s.x[2]) - es.x.head<3>()).norm());
         /* the IMM step: the tracker's path (mvt_trk_motion.c) for one track */
@@ -462,9 +519,9 @@ int main(int argc, char **argv)
         mvt_imm_t imm;
         mvt_imm_init(&imm, &icfg, &si);
         int64_t t_us = 0;
-        measure("filter_update_5cam_imm", 100000, runs, [&](int i) {
+        auto imm_step = [&](int i) {
             t_us += 40000;
-            mvt_imm_predict_to(&imm, &icfg, t_us, &si);
+            mvt_imm_predict_to_pos(&imm, &icfg, t_us, &si);
             for (int k = 0; k < 5; k++) {
                 mvt_pkf_pred_t pred;
                 mvt_pkf_innov_t in;
@@ -472,10 +529,13 @@ int main(int argc, char **argv)
                     mvt_pkf_innovation_from(&pred, &m[k], nullptr, &in) != MVT_OK)
                     continue;
                 const mvt_real noise[4] = {in.r, 0, 0, in.r};
-                mvt_imm_update(&imm, &icfg, 2, in.H, in.y, noise, &si);
+                mvt_imm_update_pos(&imm, &icfg, 2, in.H, in.y, noise, &si);
             }
+            mvt_imm_combine(&imm, &icfg, &si);
             if ((i & 1023) == 0) g_sink += si.x[0];
-        });
+        };
+        measure("filter_update_5cam_imm", 100000, runs, imm_step);
+        measure_ratio("filter_update_5cam_imm.vs_single", 2000, 401, single_step, imm_step);
         EigenImm ei;
         for (int j = 0; j < 3; j++) {
             ei.m[j] = es;
@@ -485,14 +545,18 @@ int main(int argc, char **argv)
             ei.leave[j] = icfg.model[j].leave_hz;
             ei.q[j] << icfg.model[j].q[0], icfg.model[j].q[1], icfg.model[j].q[2];
             ei.still[j] = icfg.model[j].kind == MVT_MOTION_STILL;
+            ei.eps = (float)icfg.p_outlier;
+            ei.radius = (float)icfg.outlier_radius_px;
         }
         mvt_real mu0[MVT_IMM_MODELS];
         mvt_imm_stationary(&icfg, mu0);
         for (int j = 0; j < 3; j++) ei.mu[j] = (float)mu0[j];
-        measure("filter_update_5cam_imm.eigen_tuned", 100000, runs, [&](int i) {
+        auto peer_imm_step = [&](int i) {
             ei.step(0.04f, ec.data(), z, 9.0f);
             if ((i & 1023) == 0) g_sink += ei.xc(0);
-        });
+        };
+        measure("filter_update_5cam_imm.eigen_tuned", 100000, runs, peer_imm_step);
+        measure_ratio("filter_update_5cam_imm.vs_eigen_tuned", 2000, 401, peer_imm_step, imm_step);
         std::fprintf(stderr, "# agreement after the run: |x_imm - x_eigen_imm| = %.3g m\n",
                      (double)(Eigen::Vector3f(si.x[0], si.x[1], si.x[2]) - ei.xc.head<3>()).norm());
     }

@@ -102,13 +102,56 @@ static void predict_still(mvt_cv_state_t *s, mvt_real dt, const mvt_real q[3])
     }
 }
 
-void mvt_imm_combine(const mvt_imm_t *imm, const mvt_imm_config_t *c, mvt_cv_state_t *s)
+/* The position and its covariance block (six numbers) of the combination, written out */
+static void combine_position(const mvt_imm_t *imm, int n, mvt_cv_state_t *s)
+{
+    mvt_real x0 = MVT_R(0.0), x1 = MVT_R(0.0), x2 = MVT_R(0.0);
+    for (int j = 0; j < n; j++) {
+        const mvt_real mu = imm->mu[j];
+        const mvt_real *xj = imm->m[j].x;
+        x0 += mu * xj[0];
+        x1 += mu * xj[1];
+        x2 += mu * xj[2];
+    }
+    mvt_real p00 = MVT_R(0.0), p01 = MVT_R(0.0), p02 = MVT_R(0.0), p11 = MVT_R(0.0), p12 = MVT_R(0.0),
+             p22 = MVT_R(0.0);
+    for (int j = 0; j < n; j++) {
+        const mvt_real mu = imm->mu[j];
+        const mvt_real *xj = imm->m[j].x, *Pj = imm->m[j].P;
+        const mvt_real d0 = xj[0] - x0, d1 = xj[1] - x1, d2 = xj[2] - x2;
+        const mvt_real m0 = mu * d0, m1 = mu * d1, m2 = mu * d2;
+        p00 += mu * Pj[0] + m0 * d0;
+        p01 += mu * Pj[1] + m0 * d1;
+        p02 += mu * Pj[2] + m0 * d2;
+        p11 += mu * Pj[7] + m1 * d1;
+        p12 += mu * Pj[8] + m1 * d2;
+        p22 += mu * Pj[14] + m2 * d2;
+    }
+    s->x[0] = x0;
+    s->x[1] = x1;
+    s->x[2] = x2;
+    mvt_real *P = s->P;
+    P[0] = p00;
+    P[1] = P[6] = p01;
+    P[2] = P[12] = p02;
+    P[7] = p11;
+    P[8] = P[13] = p12;
+    P[14] = p22;
+}
+
+/* The combination into s: in full (nb = 6), or only the position and its covariance block (nb = 3;
+ * the velocity and the rest of s->P left as they were). */
+static void combine(const mvt_imm_t *imm, const mvt_imm_config_t *c, mvt_cv_state_t *s, int nb)
 {
     const int n = c->n;
     s->utime_us = imm->m[0].utime_us;
     if (n == 1) {
         memcpy(s->x, imm->m[0].x, sizeof(s->x));
         memcpy(s->P, imm->m[0].P, sizeof(s->P));
+        return;
+    }
+    if (nb == 3) {
+        combine_position(imm, n, s);
         return;
     }
     /* into locals first: s may not alias the bank, but the compiler cannot know */
@@ -143,6 +186,8 @@ void mvt_imm_combine(const mvt_imm_t *imm, const mvt_imm_config_t *c, mvt_cv_sta
     }
     for (int a = 0; a < 6; a++) {
         s->x[a] = x[a];
+    }
+    for (int a = 0; a < 6; a++) {
         for (int b = a; b < 6; b++) {
             s->P[a * 6 + b] = P[a * 6 + b];
             s->P[b * 6 + a] = P[a * 6 + b];
@@ -150,7 +195,12 @@ void mvt_imm_combine(const mvt_imm_t *imm, const mvt_imm_config_t *c, mvt_cv_sta
     }
 }
 
-mvt_err_t mvt_imm_predict_to(mvt_imm_t *imm, const mvt_imm_config_t *c, int64_t utime_us, mvt_cv_state_t *s)
+void mvt_imm_combine(const mvt_imm_t *imm, const mvt_imm_config_t *c, mvt_cv_state_t *s)
+{
+    combine(imm, c, s, 6);
+}
+
+static mvt_err_t predict_to(mvt_imm_t *imm, const mvt_imm_config_t *c, int64_t utime_us, mvt_cv_state_t *s, int nb)
 {
     const int n = c->n;
     if (utime_us <= imm->m[0].utime_us) {
@@ -169,42 +219,88 @@ mvt_err_t mvt_imm_predict_to(mvt_imm_t *imm, const mvt_imm_config_t *c, int64_t 
                 p[i][j] = i == j ? stay : (MVT_R(1.0) - stay) / (mvt_real)(n - 1);
             }
         }
-        mvt_real cbar[MVT_IMM_MODELS];
-        mvt_cv_state_t mixed[MVT_IMM_MODELS];
+        /* Mixing: model j starts from x0j = sum_i w_ij x_i, P0j = sum_i w_ij (P_i + (x_i - x0j)(...)^T).
+         * Written about the combination xbar, with d_i = x_i - xbar and e_j = x0j - xbar (so
+         * sum_i w_ij d_i = e_j): P0j = sum_i w_ij (P_i + d_i d_i^T) - e_j e_j^T. The bracket is
+         * built once per model instead of once per pair, and the spreads stay small numbers (no
+         * cancellation in float). A standing model's velocity is reset by its prediction, so only
+         * its position block is mixed. */
+        /* the sums run over the whole capacity (weight 0 past n) so that the compiler unrolls them */
+        enum { K = MVT_IMM_MODELS };
+        mvt_real xbar[6] = {MVT_R(0.0), MVT_R(0.0), MVT_R(0.0), MVT_R(0.0), MVT_R(0.0), MVT_R(0.0)};
+        for (int i = 0; i < n; i++) {
+            for (int a = 0; a < 6; a++) {
+                xbar[a] += imm->mu[i] * imm->m[i].x[a];
+            }
+        }
+        mvt_real d[K][6];
+        mvt_real M[K][36]; /* upper triangle */
+        memset(d, 0, sizeof(d));
+        memset(M, 0, sizeof(M));
+        for (int i = 0; i < n; i++) {
+            const mvt_real *xi = imm->m[i].x, *Pi = imm->m[i].P;
+            for (int a = 0; a < 6; a++) {
+                d[i][a] = xi[a] - xbar[a];
+            }
+            for (int a = 0; a < 6; a++) {
+                for (int b = a; b < 6; b++) {
+                    M[i][a * 6 + b] = Pi[a * 6 + b] + d[i][a] * d[i][b];
+                }
+            }
+        }
+        mvt_real cbar[K], w[K][K]; /* w[j][i]: mixing weight of model i into model j */
         for (int j = 0; j < n; j++) {
             mvt_real cj = MVT_R(0.0);
             for (int i = 0; i < n; i++) {
                 cj += p[i][j] * imm->mu[i];
             }
             cbar[j] = cj;
-            mvt_real w[MVT_IMM_MODELS];
-            for (int i = 0; i < n; i++) {
-                w[i] = cj > MVT_R(0.0) ? p[i][j] * imm->mu[i] / cj : (i == j ? MVT_R(1.0) : MVT_R(0.0));
+            for (int i = 0; i < K; i++) {
+                w[j][i] = i >= n ? MVT_R(0.0)
+                          : cj > MVT_R(0.0) ? p[i][j] * imm->mu[i] / cj
+                                            : (i == j ? MVT_R(1.0) : MVT_R(0.0));
             }
-            mvt_cv_state_t *mj = &mixed[j];
-            mj->utime_us = imm->m[j].utime_us;
+        }
+        /* every model's old state is in d and M: the mixed ones are written in place */
+        for (int j = 0; j < n; j++) {
+            const mvt_real *wj = w[j];
+            mvt_cv_state_t *mj = &imm->m[j];
+            mvt_real e[6];
             for (int a = 0; a < 6; a++) {
                 mvt_real acc = MVT_R(0.0);
-                for (int i = 0; i < n; i++) {
-                    acc += w[i] * imm->m[i].x[a];
+                for (int i = 0; i < K; i++) {
+                    acc += wj[i] * d[i][a];
                 }
-                mj->x[a] = acc;
+                e[a] = acc;
+                mj->x[a] = xbar[a] + acc;
+            }
+            mvt_real *P = mj->P;
+            if (c->model[j].kind == MVT_MOTION_STILL) { /* predict_still sets the velocity rows */
+                for (int a = 0; a < 3; a++) {
+                    for (int b = a; b < 3; b++) {
+                        mvt_real acc = -e[a] * e[b];
+                        for (int i = 0; i < K; i++) {
+                            acc += wj[i] * M[i][a * 6 + b];
+                        }
+                        P[a * 6 + b] = acc;
+                        P[b * 6 + a] = acc;
+                    }
+                }
+                continue;
             }
             for (int a = 0; a < 6; a++) {
                 for (int b = a; b < 6; b++) {
-                    mvt_real acc = MVT_R(0.0);
-                    for (int i = 0; i < n; i++) {
-                        const mvt_real *xi = imm->m[i].x;
-                        acc += w[i] * (imm->m[i].P[a * 6 + b] + (xi[a] - mj->x[a]) * (xi[b] - mj->x[b]));
+                    mvt_real acc = -e[a] * e[b];
+                    for (int i = 0; i < K; i++) {
+                        acc += wj[i] * M[i][a * 6 + b];
                     }
-                    mj->P[a * 6 + b] = acc;
-                    mj->P[b * 6 + a] = acc;
+                    P[a * 6 + b] = acc;
+                    P[b * 6 + a] = acc;
                 }
             }
         }
         mvt_real sum = MVT_R(0.0);
         for (int j = 0; j < n; j++) {
-            imm->m[j] = mixed[j];
             sum += cbar[j];
         }
         for (int j = 0; j < n; j++) {
@@ -220,16 +316,26 @@ mvt_err_t mvt_imm_predict_to(mvt_imm_t *imm, const mvt_imm_config_t *c, int64_t 
         }
         mj->utime_us = utime_us;
     }
-    mvt_imm_combine(imm, c, s);
+    combine(imm, c, s, nb);
     return MVT_OK;
+}
+
+mvt_err_t mvt_imm_predict_to(mvt_imm_t *imm, const mvt_imm_config_t *c, int64_t utime_us, mvt_cv_state_t *s)
+{
+    return predict_to(imm, c, utime_us, s, 6);
+}
+
+mvt_err_t mvt_imm_predict_to_pos(mvt_imm_t *imm, const mvt_imm_config_t *c, int64_t utime_us, mvt_cv_state_t *s)
+{
+    return predict_to(imm, c, utime_us, s, 3);
 }
 
 /* Per model: the innovation, its covariance and inverse, and the gain rows. */
 typedef struct imm_upd {
-    mvt_real hpP[18]; /* H P_j, m x 6 */
-    mvt_real S[9];    /* m x m */
-    mvt_real Si[9];
-    mvt_real y[3];
+    mvt_real hpP[18]; /* H P_j, m x 6 (pixel update: its whitened rows L^-1 H P_j) */
+    mvt_real S[9];    /* m x m (pixel update: 1 / d0, 1 / d1 of S = L D L^T) */
+    mvt_real Si[9];   /* (not used by the pixel update) */
+    mvt_real y[3];    /* (pixel update: whitened, L^-1 y) */
     mvt_real g;       /* Gaussian likelihood N(y; 0, S) */
     int nx;           /* state rows the measurement reaches: 3 for a standing model (P_pv = 0) */
 } imm_upd_t;
@@ -328,74 +434,82 @@ static void apply(mvt_cv_state_t *mj, int m, const imm_upd_t *u, mvt_real w)
     }
 }
 
-/* The pixel update (m = 2) written out for a fixed number of state rows, so that the compiler
- * unrolls it: the IMM's hot path (every camera, every model). Same arithmetic as innovation() and
- * apply(). */
+/* The pixel update (m = 2), the IMM's hot path (every camera, every model), written out for a fixed
+ * number of state rows so that the compiler unrolls it. With S = L D L^T (L unit lower triangular,
+ * l = S01 / S00, D = diag(S00, det S / S00)) and v = L^-1 H P_j, z = L^-1 y (whitened rows):
+ *   K y = v0 z0 / d0 + v1 z1 / d1,   K S K^T = v0 v0^T / d0 + v1 v1^T / d1,   y^T S^-1 y = z0^2 / d0 + z1^2 / d1.
+ * The same update as innovation() and apply() (agreement in tests/test_oracle.cpp); the covariance
+ * subtracts two rank-one terms (3 flops per element of the triangle, where the expanded Joseph form
+ * of apply() takes 12). */
 #define MVT_IMM_PIXEL_UPDATE(NAME, NX)                                                                                \
-    static int NAME##_innov(const mvt_cv_state_t *mj, const mvt_cv_state_t *s, const mvt_real *H, const mvt_real *y, \
-                            const mvt_real *noise, imm_upd_t *u)                                                     \
-    {                                                                                                                \
-        const mvt_real *P = mj->P;                                                                                   \
-        const mvt_real dx0 = mj->x[0] - s->x[0], dx1 = mj->x[1] - s->x[1], dx2 = mj->x[2] - s->x[2];                 \
-        u->nx = NX;                                                                                                  \
-        for (int a = 0; a < 2; a++) {                                                                                \
-            const mvt_real *h = &H[a * 3];                                                                           \
-            u->y[a] = y[a] - (h[0] * dx0 + h[1] * dx1 + h[2] * dx2);                                                 \
-            for (int b = 0; b < NX; b++) {                                                                           \
-                u->hpP[a * 6 + b] = h[0] * P[b] + h[1] * P[6 + b] + h[2] * P[12 + b];                                \
-            }                                                                                                        \
-        }                                                                                                            \
-        const mvt_real s00 = u->hpP[0] * H[0] + u->hpP[1] * H[1] + u->hpP[2] * H[2] + noise[0];                      \
-        const mvt_real s01 = u->hpP[0] * H[3] + u->hpP[1] * H[4] + u->hpP[2] * H[5] +                                \
-                             MVT_R(0.5) * (noise[1] + noise[2]);                                                     \
-        const mvt_real s11 = u->hpP[6] * H[3] + u->hpP[7] * H[4] + u->hpP[8] * H[5] + noise[3];                      \
-        const mvt_real det = s00 * s11 - s01 * s01;                                                                  \
-        if (!(s00 > MVT_R(0.0)) || !(det > MVT_R(0.0)) || !isfinite(det)) {                                          \
-            return 0;                                                                                                \
-        }                                                                                                            \
-        const mvt_real id = MVT_R(1.0) / det;                                                                        \
-        u->S[0] = s00;                                                                                               \
-        u->S[1] = s01;                                                                                               \
-        u->S[2] = s01;                                                                                               \
-        u->S[3] = s11;                                                                                               \
-        u->Si[0] = s11 * id;                                                                                         \
-        u->Si[1] = -s01 * id;                                                                                        \
-        u->Si[2] = -s01 * id;                                                                                        \
-        u->Si[3] = s00 * id;                                                                                         \
-        const mvt_real d2 = u->y[0] * (u->Si[0] * u->y[0] + u->Si[1] * u->y[1]) +                                    \
-                            u->y[1] * (u->Si[1] * u->y[0] + u->Si[3] * u->y[1]);                                     \
-        u->g = MVT_EXP(MVT_R(-0.5) * d2) / (MVT_R(6.283185307179586) * MVT_SQRT(det));                              \
-        return isfinite(d2) && d2 >= MVT_R(0.0);                                                                     \
-    }                                                                                                                \
-    static void NAME##_apply(mvt_cv_state_t *mj, const imm_upd_t *u, mvt_real w)                                     \
-    {                                                                                                                \
-        mvt_real k0[NX], k1[NX], ks0[NX], ks1[NX], d[NX];                                                            \
-        const mvt_real *hp0 = &u->hpP[0], *hp1 = &u->hpP[6];                                                         \
-        for (int i = 0; i < NX; i++) {                                                                               \
-            k0[i] = hp0[i] * u->Si[0] + hp1[i] * u->Si[2];                                                           \
-            k1[i] = hp0[i] * u->Si[1] + hp1[i] * u->Si[3];                                                           \
-            d[i] = k0[i] * u->y[0] + k1[i] * u->y[1];                                                                \
-            mj->x[i] += w * d[i];                                                                                    \
-            ks0[i] = k0[i] * u->S[0] + k1[i] * u->S[2] - hp0[i];                                                     \
-            ks1[i] = k0[i] * u->S[1] + k1[i] * u->S[3] - hp1[i];                                                     \
-        }                                                                                                            \
-        const mvt_real spread = w * (MVT_R(1.0) - w);                                                                \
-        mvt_real *P = mj->P;                                                                                         \
-        for (int i = 0; i < NX; i++) {                                                                               \
-            for (int j = i; j < NX; j++) {                                                                           \
-                const mvt_real inc = ks0[i] * k0[j] + ks1[i] * k1[j] - k0[i] * hp0[j] - k1[i] * hp1[j];              \
-                const mvt_real v = P[i * 6 + j] + w * inc + spread * d[i] * d[j];                                    \
-                P[i * 6 + j] = v;                                                                                    \
-                P[j * 6 + i] = v;                                                                                    \
-            }                                                                                                        \
-        }                                                                                                            \
+    static int NAME##_innov(const mvt_cv_state_t *mj, const mvt_cv_state_t *s, const mvt_real *H, const mvt_real *y,  \
+                            const mvt_real *noise, imm_upd_t *u)                                                      \
+    {                                                                                                                 \
+        const mvt_real *P = mj->P;                                                                                    \
+        const mvt_real dx0 = mj->x[0] - s->x[0], dx1 = mj->x[1] - s->x[1], dx2 = mj->x[2] - s->x[2];                  \
+        u->nx = NX;                                                                                                   \
+        for (int a = 0; a < 2; a++) {                                                                                 \
+            const mvt_real *h = &H[a * 3];                                                                            \
+            u->y[a] = y[a] - (h[0] * dx0 + h[1] * dx1 + h[2] * dx2);                                                  \
+            for (int b = 0; b < NX; b++) {                                                                            \
+                u->hpP[a * 6 + b] = h[0] * P[b] + h[1] * P[6 + b] + h[2] * P[12 + b];                                 \
+            }                                                                                                         \
+        }                                                                                                             \
+        const mvt_real s00 = u->hpP[0] * H[0] + u->hpP[1] * H[1] + u->hpP[2] * H[2] + noise[0];                       \
+        const mvt_real s01 = u->hpP[0] * H[3] + u->hpP[1] * H[4] + u->hpP[2] * H[5] +                                 \
+                             MVT_R(0.5) * (noise[1] + noise[2]);                                                      \
+        const mvt_real s11 = u->hpP[6] * H[3] + u->hpP[7] * H[4] + u->hpP[8] * H[5] + noise[3];                       \
+        if (!(s00 > MVT_R(0.0)) || !isfinite(s00)) {                                                                  \
+            return 0;                                                                                                 \
+        }                                                                                                             \
+        const mvt_real i0 = MVT_R(1.0) / s00;                                                                        \
+        const mvt_real l = s01 * i0;                                                                                 \
+        const mvt_real d1 = s11 - l * s01;                                                                            \
+        if (!(d1 > MVT_R(0.0)) || !isfinite(d1)) {                                                                    \
+            return 0;                                                                                                 \
+        }                                                                                                             \
+        const mvt_real i1 = MVT_R(1.0) / d1;                                                                         \
+        u->S[0] = i0;                                                                                                \
+        u->S[1] = i1;                                                                                                \
+        const mvt_real z1 = u->y[1] - l * u->y[0];                                                                    \
+        u->y[1] = z1;                                                                                                 \
+        for (int b = 0; b < NX; b++) {                                                                                \
+            u->hpP[6 + b] -= l * u->hpP[b];                                                                           \
+        }                                                                                                             \
+        const mvt_real d2 = u->y[0] * u->y[0] * i0 + z1 * z1 * i1;                                                   \
+        u->g = MVT_EXP(MVT_R(-0.5) * d2) * MVT_SQRT(i0 * i1) * MVT_R(0.15915494309189535); /* 1 / (2 pi) */          \
+        return isfinite(d2) && d2 >= MVT_R(0.0);                                                                      \
+    }                                                                                                                 \
+    /* x += w K y; P += -w K S K^T + w (1 - w) (K y)(K y)^T */                                                        \
+    static void NAME##_apply(mvt_cv_state_t *mj, const imm_upd_t *u, mvt_real w)                                      \
+    {                                                                                                                 \
+        const mvt_real *v0 = &u->hpP[0], *v1 = &u->hpP[6];                                                            \
+        const mvt_real i0 = u->S[0], i1 = u->S[1];                                                                   \
+        const mvt_real c0 = u->y[0] * i0, c1 = u->y[1] * i1;                                                          \
+        const mvt_real spread = w * (MVT_R(1.0) - w);                                                                 \
+        mvt_real d[NX], a0[NX], a1[NX], sd[NX];                                                                       \
+        for (int i = 0; i < NX; i++) {                                                                                \
+            d[i] = v0[i] * c0 + v1[i] * c1;                                                                           \
+            mj->x[i] += w * d[i];                                                                                     \
+            a0[i] = w * i0 * v0[i];                                                                                   \
+            a1[i] = w * i1 * v1[i];                                                                                   \
+            sd[i] = spread * d[i];                                                                                    \
+        }                                                                                                             \
+        mvt_real *P = mj->P;                                                                                          \
+        for (int i = 0; i < NX; i++) {                                                                                \
+            for (int j = i; j < NX; j++) {                                                                            \
+                const mvt_real v = P[i * 6 + j] - (a0[i] * v0[j] + a1[i] * v1[j]) + sd[i] * d[j];                     \
+                P[i * 6 + j] = v;                                                                                     \
+                P[j * 6 + i] = v;                                                                                     \
+            }                                                                                                         \
+        }                                                                                                             \
     }
 
 MVT_IMM_PIXEL_UPDATE(px6, 6)
 MVT_IMM_PIXEL_UPDATE(px3, 3)
 
-mvt_err_t mvt_imm_update(mvt_imm_t *imm, const mvt_imm_config_t *c, int m, const mvt_real *H, const mvt_real *y,
-                         const mvt_real *noise, mvt_cv_state_t *s)
+static mvt_err_t update(mvt_imm_t *imm, const mvt_imm_config_t *c, int m, const mvt_real *H, const mvt_real *y,
+                        const mvt_real *noise, mvt_cv_state_t *s, int nb)
 {
     MVT_ASSERT(m == 2 || m == 3);
     const int n = c->n;
@@ -442,8 +556,20 @@ mvt_err_t mvt_imm_update(mvt_imm_t *imm, const mvt_imm_config_t *c, int m, const
             }
         } /* else: every model equally far off (likelihoods underflow), no evidence either way */
     }
-    mvt_imm_combine(imm, c, s);
+    combine(imm, c, s, nb);
     return MVT_OK;
+}
+
+mvt_err_t mvt_imm_update(mvt_imm_t *imm, const mvt_imm_config_t *c, int m, const mvt_real *H, const mvt_real *y,
+                         const mvt_real *noise, mvt_cv_state_t *s)
+{
+    return update(imm, c, m, H, y, noise, s, 6);
+}
+
+mvt_err_t mvt_imm_update_pos(mvt_imm_t *imm, const mvt_imm_config_t *c, int m, const mvt_real *H, const mvt_real *y,
+                             const mvt_real *noise, mvt_cv_state_t *s)
+{
+    return update(imm, c, m, H, y, noise, s, 3);
 }
 
 mvt_err_t mvt_imm_truncate_ground(mvt_imm_t *imm, const mvt_imm_config_t *c, const mvt_real H[3], mvt_real value,

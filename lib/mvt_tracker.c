@@ -150,7 +150,7 @@ static void step_projective(mvt_tracker_t *self, const mvt_frame_t *frame, const
         const int64_t tk = frame->views[k].utime_us;
         for (int t = 0; t < MVT_MAX_TARGETS; t++) {
             if (self->tracks[t].id != 0) {
-                mvt_trk_predict(self, &self->tracks[t], tk);
+                mvt_trk_predict_pos(self, &self->tracks[t], tk);
             }
         }
         int assign[MVT_MAX_TARGETS];
@@ -182,6 +182,11 @@ static void step_projective(mvt_tracker_t *self, const mvt_frame_t *frame, const
             } else {
                 self->counters.numeric_faults++;
             }
+        }
+    }
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        if (self->tracks[t].id != 0) {
+            mvt_trk_settle(self, &self->tracks[t]);
         }
     }
 }

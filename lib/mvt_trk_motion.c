@@ -33,6 +33,22 @@ void mvt_trk_predict(mvt_tracker_t *self, mvt_track_t *tr, int64_t utime_us)
     }
 }
 
+void mvt_trk_predict_pos(mvt_tracker_t *self, mvt_track_t *tr, int64_t utime_us)
+{
+    if (single(self)) {
+        (void)mvt_cv_predict_to(&tr->s, utime_us, self->cfg.motion.model[0].q);
+    } else {
+        (void)mvt_imm_predict_to_pos(&tr->imm, &self->cfg.motion, utime_us, &tr->s);
+    }
+}
+
+void mvt_trk_settle(mvt_tracker_t *self, mvt_track_t *tr)
+{
+    if (!single(self)) {
+        mvt_imm_combine(&tr->imm, &self->cfg.motion, &tr->s);
+    }
+}
+
 void mvt_trk_predicted(const mvt_tracker_t *self, const mvt_track_t *tr, int64_t utime_us, mvt_cv_state_t *out)
 {
     *out = tr->s;
@@ -52,7 +68,7 @@ mvt_err_t mvt_trk_update_pkf(mvt_tracker_t *self, mvt_track_t *tr, const mvt_pkf
     const mvt_real e[3] = {extra_px2 != NULL ? extra_px2[0] : MVT_R(0.0), extra_px2 != NULL ? extra_px2[1] : MVT_R(0.0),
                            extra_px2 != NULL ? extra_px2[2] : MVT_R(0.0)};
     const mvt_real noise[4] = {in->r + e[0], e[1], e[1], in->r + e[2]};
-    return mvt_imm_update(&tr->imm, &self->cfg.motion, 2, in->H, in->y, noise, &tr->s);
+    return mvt_imm_update_pos(&tr->imm, &self->cfg.motion, 2, in->H, in->y, noise, &tr->s);
 }
 
 mvt_err_t mvt_trk_update_point(mvt_tracker_t *self, mvt_track_t *tr, const mvt_real z[3], const mvt_real R[9])
