@@ -438,9 +438,9 @@ static void apply(mvt_cv_state_t *mj, int m, const imm_upd_t *u, mvt_real w)
  * number of state rows so that the compiler unrolls it. With S = L D L^T (L unit lower triangular,
  * l = S01 / S00, D = diag(S00, det S / S00)) and v = L^-1 H P_j, z = L^-1 y (whitened rows):
  *   K y = v0 z0 / d0 + v1 z1 / d1,   K S K^T = v0 v0^T / d0 + v1 v1^T / d1,   y^T S^-1 y = z0^2 / d0 + z1^2 / d1.
- * The same update as innovation() and apply() (agreement in tests/test_oracle.cpp); the covariance
- * subtracts two rank-one terms (3 flops per element of the triangle, where the expanded Joseph form
- * of apply() takes 12). */
+ * The same update as innovation() and apply() (agreement in tests/test_oracle.cpp); the covariance's
+ * change, robust term included, is a rank-two form in (v0, v1): 2 multiply-adds per element of the
+ * triangle, where the expanded Joseph form of apply() takes 12 flops. */
 #define MVT_IMM_PIXEL_UPDATE(NAME, NX)                                                                                \
     static int NAME##_innov(const mvt_cv_state_t *mj, const mvt_cv_state_t *s, const mvt_real *H, const mvt_real *y,  \
                             const mvt_real *noise, imm_upd_t *u)                                                      \
@@ -481,28 +481,29 @@ static void apply(mvt_cv_state_t *mj, int m, const imm_upd_t *u, mvt_real w)
         return isfinite(d2) && d2 >= MVT_R(0.0);                                                                      \
     }                                                                                                                 \
     /* x += w K y; P += -w K S K^T + w (1 - w) (K y)(K y)^T */                                                        \
-    static void NAME##_apply(mvt_cv_state_t *mj, const imm_upd_t *u, mvt_real w)                                      \
-    {                                                                                                                 \
-        const mvt_real *v0 = &u->hpP[0], *v1 = &u->hpP[6];                                                            \
+    static void NAME##_apply(mvt_cv_state_t *mj, const imm_upd_t *u, mvt_real w)                                     \
+    {                                                                                                                \
+        /* K y = c0 v0 + c1 v1, so the whole change of P is a quadratic form in (v0, v1):                            \
+         * P -= [v0 v1] A [v0 v1]^T, A = w diag(i0, i1) - w (1 - w) c c^T (2 flops per element) */                   \
+        const mvt_real *v0 = &u->hpP[0], *v1 = &u->hpP[6];                                                           \
         const mvt_real i0 = u->S[0], i1 = u->S[1];                                                                   \
-        const mvt_real c0 = u->y[0] * i0, c1 = u->y[1] * i1;                                                          \
-        const mvt_real spread = w * (MVT_R(1.0) - w);                                                                 \
-        mvt_real d[NX], a0[NX], a1[NX], sd[NX];                                                                       \
-        for (int i = 0; i < NX; i++) {                                                                                \
-            d[i] = v0[i] * c0 + v1[i] * c1;                                                                           \
-            mj->x[i] += w * d[i];                                                                                     \
-            a0[i] = w * i0 * v0[i];                                                                                   \
-            a1[i] = w * i1 * v1[i];                                                                                   \
-            sd[i] = spread * d[i];                                                                                    \
-        }                                                                                                             \
-        mvt_real *P = mj->P;                                                                                          \
-        for (int i = 0; i < NX; i++) {                                                                                \
-            for (int j = i; j < NX; j++) {                                                                            \
-                const mvt_real v = P[i * 6 + j] - (a0[i] * v0[j] + a1[i] * v1[j]) + sd[i] * d[j];                     \
-                P[i * 6 + j] = v;                                                                                     \
-                P[j * 6 + i] = v;                                                                                     \
-            }                                                                                                         \
-        }                                                                                                             \
+        const mvt_real c0 = u->y[0] * i0, c1 = u->y[1] * i1;                                                         \
+        const mvt_real spread = w * (MVT_R(1.0) - w);                                                                \
+        const mvt_real a00 = w * i0 - spread * c0 * c0, a01 = -spread * c0 * c1, a11 = w * i1 - spread * c1 * c1;    \
+        mvt_real t0[NX], t1[NX];                                                                                     \
+        for (int i = 0; i < NX; i++) {                                                                               \
+            mj->x[i] += w * (v0[i] * c0 + v1[i] * c1);                                                               \
+            t0[i] = a00 * v0[i] + a01 * v1[i];                                                                       \
+            t1[i] = a01 * v0[i] + a11 * v1[i];                                                                       \
+        }                                                                                                            \
+        mvt_real *P = mj->P;                                                                                         \
+        for (int i = 0; i < NX; i++) {                                                                               \
+            for (int j = i; j < NX; j++) {                                                                           \
+                const mvt_real v = P[i * 6 + j] - (v0[i] * t0[j] + v1[i] * t1[j]);                                   \
+                P[i * 6 + j] = v;                                                                                    \
+                P[j * 6 + i] = v;                                                                                    \
+            }                                                                                                        \
+        }                                                                                                            \
     }
 
 MVT_IMM_PIXEL_UPDATE(px6, 6)
