@@ -200,6 +200,22 @@ void mvt_imm_combine(const mvt_imm_t *imm, const mvt_imm_config_t *c, mvt_cv_sta
     combine(imm, c, s, 6);
 }
 
+/* The upper nb x nb block of a mixed covariance, sum_i w_i M_i - e e^T, mirrored. Inlined with nb
+ * constant, and summed over the whole capacity (weight 0 past n), so that the compiler unrolls it. */
+static inline void mix_block(mvt_real *P, int nb, const mvt_real *w, mvt_real (*M)[36], const mvt_real *e)
+{
+    for (int a = 0; a < nb; a++) {
+        for (int b = a; b < nb; b++) {
+            mvt_real acc = -e[a] * e[b];
+            for (int i = 0; i < MVT_IMM_MODELS; i++) {
+                acc += w[i] * M[i][a * 6 + b];
+            }
+            P[a * 6 + b] = acc;
+            P[b * 6 + a] = acc;
+        }
+    }
+}
+
 static mvt_err_t predict_to(mvt_imm_t *imm, const mvt_imm_config_t *c, int64_t utime_us, mvt_cv_state_t *s, int nb)
 {
     const int n = c->n;
@@ -274,30 +290,8 @@ static mvt_err_t predict_to(mvt_imm_t *imm, const mvt_imm_config_t *c, int64_t u
                 e[a] = acc;
                 mj->x[a] = xbar[a] + acc;
             }
-            mvt_real *P = mj->P;
-            if (c->model[j].kind == MVT_MOTION_STILL) { /* predict_still sets the velocity rows */
-                for (int a = 0; a < 3; a++) {
-                    for (int b = a; b < 3; b++) {
-                        mvt_real acc = -e[a] * e[b];
-                        for (int i = 0; i < K; i++) {
-                            acc += wj[i] * M[i][a * 6 + b];
-                        }
-                        P[a * 6 + b] = acc;
-                        P[b * 6 + a] = acc;
-                    }
-                }
-                continue;
-            }
-            for (int a = 0; a < 6; a++) {
-                for (int b = a; b < 6; b++) {
-                    mvt_real acc = -e[a] * e[b];
-                    for (int i = 0; i < K; i++) {
-                        acc += wj[i] * M[i][a * 6 + b];
-                    }
-                    P[a * 6 + b] = acc;
-                    P[b * 6 + a] = acc;
-                }
-            }
+            /* a standing model's prediction sets its velocity rows: only its position block is mixed */
+            mix_block(mj->P, c->model[j].kind == MVT_MOTION_STILL ? 3 : 6, wj, M, e);
         }
         mvt_real sum = MVT_R(0.0);
         for (int j = 0; j < n; j++) {
