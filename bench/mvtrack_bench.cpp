@@ -241,8 +241,8 @@ struct EigenSeqFilter {
         return -0.5f * y.dot(Si * y) - 0.5f * std::log(det);
     }
     /* The IMM's update, as mvt_imm's pixel update: S = L D L^T, whitened rows v = L^-1 H P, the
-     * covariance less two rank-one terms; NX = 3 for a standing model (its P_pv is 0). Returns the
-     * log-likelihood as update(). */
+     * robust covariance change in terms of them; NX = 3 for a standing model (its P_pv is 0).
+     * Returns the measurement's likelihood (1 - eps) N(y; 0, S) + clutter. */
     template <int NX>
     float update_ldl(const Eigen::Matrix<float, 2, 3> &J, const Eigen::Vector2f &y, float r, float eps, float clutter)
     {

@@ -186,8 +186,6 @@ static void combine(const mvt_imm_t *imm, const mvt_imm_config_t *c, mvt_cv_stat
     }
     for (int a = 0; a < 6; a++) {
         s->x[a] = x[a];
-    }
-    for (int a = 0; a < 6; a++) {
         for (int b = a; b < 6; b++) {
             s->P[a * 6 + b] = P[a * 6 + b];
             s->P[b * 6 + a] = P[a * 6 + b];
@@ -239,9 +237,8 @@ static mvt_err_t predict_to(mvt_imm_t *imm, const mvt_imm_config_t *c, int64_t u
          * Written about the combination xbar, with d_i = x_i - xbar and e_j = x0j - xbar (so
          * sum_i w_ij d_i = e_j): P0j = sum_i w_ij (P_i + d_i d_i^T) - e_j e_j^T. The bracket is
          * built once per model instead of once per pair, and the spreads stay small numbers (no
-         * cancellation in float). A standing model's velocity is reset by its prediction, so only
-         * its position block is mixed. */
-        /* the sums run over the whole capacity (weight 0 past n) so that the compiler unrolls them */
+         * cancellation in float). The sums run over the whole capacity (weight 0 past n) so that the
+         * compiler unrolls them. */
         enum { K = MVT_IMM_MODELS };
         mvt_real xbar[6] = {MVT_R(0.0), MVT_R(0.0), MVT_R(0.0), MVT_R(0.0), MVT_R(0.0), MVT_R(0.0)};
         for (int i = 0; i < n; i++) {

@@ -127,8 +127,8 @@ mvt_err_t mvt_imm_update(mvt_imm_t *imm, const mvt_imm_config_t *c, int m, const
 /* mvt_imm_predict_to and mvt_imm_update for several cameras in a row: s receives only what projecting
  * and gating the next camera read, the combined position and the position block of P (the velocity
  * and P's velocity rows and columns are left as they were, stale). Call mvt_imm_combine after the
- * last, before anything reads the velocity or its covariance. Saves ~n * 90 flops per call (the IMM step's combination was a
- * quarter of its time). */
+ * last, before anything reads the velocity or its covariance. The whole combination after every
+ * camera was a quarter of the IMM step's time. */
 mvt_err_t mvt_imm_predict_to_pos(mvt_imm_t *imm, const mvt_imm_config_t *c, int64_t utime_us, mvt_cv_state_t *s);
 mvt_err_t mvt_imm_update_pos(mvt_imm_t *imm, const mvt_imm_config_t *c, int m, const mvt_real *H, const mvt_real *y,
                              const mvt_real *noise, mvt_cv_state_t *s);

@@ -283,16 +283,7 @@ void mvt_tracker_output(const mvt_tracker_t *self, int64_t utime_us, mvt_output_
         o->cov_m2[4] = P[8];
         o->cov_m2[5] = P[14];
         o->cameras_used = tr->cameras_used;
-        o->hue = MVT_R(-1.0);
-        o->saturation = MVT_R(-1.0);
-        if (tr->app.n > MVT_R(0.0)) {
-            const mvt_real *m = tr->app.m;
-            mvt_real h = MVT_ATAN2(m[1], m[0]) / MVT_R(6.283185307179586);
-            h = h < MVT_R(0.0) ? h + MVT_R(1.0) : h;
-            o->hue = h < MVT_R(1.0) ? h : MVT_R(0.0);
-            const mvt_real sat = MVT_SQRT(m[0] * m[0] + m[1] * m[1]);
-            o->saturation = sat < MVT_R(1.0) ? sat : MVT_R(1.0);
-        }
+        mvt_trk_app_hue_sat(&tr->app, &o->hue, &o->saturation);
     }
 }
 

@@ -55,6 +55,9 @@ static inline int mvt_trk_popcount(uint32_t x)
 
 /* A detection's chroma from its hue and saturation; 0 when either is unknown or invalid. */
 int mvt_trk_chroma(const mvt_detection_t *det, mvt_real a[2]);
+/* The hue and saturation of an appearance's mean (the inverse of mvt_trk_chroma); -1 and -1 when
+ * it has not been seen in colour. */
+void mvt_trk_app_hue_sat(const mvt_app_t *app, mvt_real *hue, mvt_real *sat);
 /* Resets an appearance to "not seen in colour". */
 void mvt_trk_app_reset(mvt_app_t *app);
 /* -2 ln LR of chroma a for appearance app (0 when app->n == 0), and its least value (a at m). */
@@ -114,6 +117,11 @@ typedef enum mvt_trk_evidence {
     MVT_TRK_COVERED = 1, /* inside a blob's box widened by slack_px: seen, or hidden in that blob */
     MVT_TRK_EMPTY = 2    /* in the picture and in no blob: that camera shows nobody there */
 } mvt_trk_evidence_t;
+
+/* A blob's box (u0, v0, u1, v1) is usable: finite and not empty. */
+int mvt_trk_box_ok(const mvt_real b[4]);
+/* Image point uv lies in usable box b widened by slack_u, slack_v pixels. */
+int mvt_trk_in_box(const mvt_real b[4], const mvt_real uv[2], mvt_real slack_u, mvt_real slack_v);
 
 /* The view's evidence on a head at x (call only for a view with boxes). O(D). */
 mvt_trk_evidence_t mvt_trk_view_evidence(const mvt_tracker_t *self, const mvt_view_t *view, int k,

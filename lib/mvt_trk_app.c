@@ -39,6 +39,21 @@ int mvt_trk_chroma(const mvt_detection_t *det, mvt_real a[2])
     return 1;
 }
 
+void mvt_trk_app_hue_sat(const mvt_app_t *app, mvt_real *hue, mvt_real *sat)
+{
+    *hue = MVT_R(-1.0);
+    *sat = MVT_R(-1.0);
+    if (!(app->n > MVT_R(0.0))) {
+        return;
+    }
+    const mvt_real *m = app->m;
+    mvt_real h = MVT_ATAN2(m[1], m[0]) / TWO_PI;
+    h = h < MVT_R(0.0) ? h + MVT_R(1.0) : h;
+    *hue = h < MVT_R(1.0) ? h : MVT_R(0.0);
+    const mvt_real s = MVT_SQRT(m[0] * m[0] + m[1] * m[1]);
+    *sat = s < MVT_R(1.0) ? s : MVT_R(1.0);
+}
+
 void mvt_trk_app_reset(mvt_app_t *app)
 {
     app->m[0] = MVT_R(0.0);

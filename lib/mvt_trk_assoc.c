@@ -123,15 +123,9 @@ static int in_picture(const mvt_camera_t *cam, const mvt_pkf_pred_t *p)
  * colour was right 189 times and wrong 186, with it right 192 and wrong 174. */
 static int blob_holds_two(const mvt_view_t *view, int d, const mvt_real heads[][4], int n_heads)
 {
-    const mvt_real *b = view->det[d].box;
-    if (n_heads < 2 ||
-        !(isfinite(b[0]) && isfinite(b[1]) && isfinite(b[2]) && isfinite(b[3]) && b[2] > b[0] && b[3] > b[1])) {
-        return 0;
-    }
     int n = 0;
     for (int i = 0; i < n_heads && n < 2; i++) {
-        const mvt_real *h = heads[i]; /* u, v and their margins */
-        n += h[0] >= b[0] - h[2] && h[0] <= b[2] + h[2] && h[1] >= b[1] - h[3] && h[1] <= b[3] + h[3];
+        n += mvt_trk_in_box(view->det[d].box, heads[i], heads[i][2], heads[i][3]); /* u, v, margins */
     }
     return n >= 2;
 }

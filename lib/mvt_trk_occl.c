@@ -33,10 +33,15 @@
  * 0.972 with 0.3, 0.970 with "the prediction within 3 sigma of the band". */
 #define OCCL_MIN_MASS MVT_R(0.1)
 
-/* Is the box usable: finite, non-empty. */
-static int box_ok(const mvt_real b[4])
+int mvt_trk_box_ok(const mvt_real b[4])
 {
     return isfinite(b[0]) && isfinite(b[1]) && isfinite(b[2]) && isfinite(b[3]) && b[2] > b[0] && b[3] > b[1];
+}
+
+int mvt_trk_in_box(const mvt_real b[4], const mvt_real uv[2], mvt_real slack_u, mvt_real slack_v)
+{
+    return mvt_trk_box_ok(b) && uv[0] >= b[0] - slack_u && uv[0] <= b[2] + slack_u && uv[1] >= b[1] - slack_v &&
+           uv[1] <= b[3] + slack_v;
 }
 
 mvt_trk_evidence_t mvt_trk_view_evidence(const mvt_tracker_t *self, const mvt_view_t *view, int k,
@@ -49,9 +54,7 @@ mvt_trk_evidence_t mvt_trk_view_evidence(const mvt_tracker_t *self, const mvt_vi
         return MVT_TRK_NO_INFO; /* out of the picture (or too near its border to say) */
     }
     for (int d = 0; d < self->num_meas[k]; d++) {
-        const mvt_real *b = view->det[d].box;
-        if (box_ok(b) && uv[0] >= b[0] - slack_px && uv[0] <= b[2] + slack_px && uv[1] >= b[1] - slack_px &&
-            uv[1] <= b[3] + slack_px) {
+        if (mvt_trk_in_box(view->det[d].box, uv, slack_px, slack_px)) {
             return MVT_TRK_COVERED;
         }
     }
@@ -82,7 +85,7 @@ void mvt_trk_evidence_weights(mvt_tracker_t *self, const mvt_frame_t *frame)
         self->ev_boxes[k] = 0;
         for (int d = 0; d < self->num_meas[k]; d++) {
             n += self->meas_ok[k][d];
-            if (view->observed && box_ok(view->det[d].box)) {
+            if (view->observed && mvt_trk_box_ok(view->det[d].box)) {
                 self->ev_boxes[k] = 1;
             }
         }
@@ -168,7 +171,7 @@ void mvt_trk_occlusion(mvt_tracker_t *self, const mvt_view_t *view, int k, const
         mvt_real best_lik = MVT_R(0.0), best_lo = MVT_R(0.0), best_hi = MVT_R(0.0);
         for (int d = 0; d < nd; d++) {
             const mvt_real *b = view->det[d].box;
-            if (!self->used[k][d] || !box_ok(b)) {
+            if (!self->used[k][d] || !mvt_trk_box_ok(b)) {
                 continue;
             }
             const mvt_real sig = MVT_SQRT(self->meas[k][d].var_px2);

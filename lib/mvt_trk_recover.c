@@ -123,24 +123,24 @@ static int record_test(const mvt_tracker_t *self, const mvt_lost_t *r, const mvt
     return 1;
 }
 
-/* The record nearest a birth at x within the gate (its d^2 in *d2), or -1. */
+/* The record in reach of a birth at x with the least score (record_test; in *score_out), or -1. */
 static int nearest_record(const mvt_tracker_t *self, const mvt_real x[3], const mvt_real cov[9],
-                          const mvt_app_obs_t *obs, int64_t now_us, mvt_real *d2_out)
+                          const mvt_app_obs_t *obs, int64_t now_us, mvt_real *score_out)
 {
     int best = -1;
-    mvt_real best_d2 = MVT_TRK_GATE3;
+    mvt_real best_score = MVT_R(0.0);
     for (int i = 0; i < MVT_MAX_LOST; i++) {
         const mvt_lost_t *r = &self->lost[i];
         if (r->id == 0 || r->until_us < now_us) {
             continue;
         }
-        mvt_real d2;
-        if (record_test(self, r, x, cov, obs, now_us, &d2) && (best < 0 || d2 < best_d2)) {
-            best_d2 = d2;
+        mvt_real score;
+        if (record_test(self, r, x, cov, obs, now_us, &score) && (best < 0 || score < best_score)) {
+            best_score = score;
             best = i;
         }
     }
-    *d2_out = best_d2;
+    *score_out = best_score;
     return best;
 }
 
@@ -151,7 +151,7 @@ void mvt_trk_release_contradicted(mvt_tracker_t *self, const mvt_real x[3], cons
         return;
     }
     int best = -1;
-    mvt_real best_d2 = MVT_TRK_GATE3;
+    mvt_real best_score = MVT_R(0.0);
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         const mvt_track_t *tr = &self->tracks[t];
         if (tr->id == 0 || tr->status == MVT_TRACK_TENTATIVE || tr->misses < 1 || tr->last_consistent_us >= now_us) {
@@ -159,14 +159,14 @@ void mvt_trk_release_contradicted(mvt_tracker_t *self, const mvt_real x[3], cons
         }
         mvt_lost_t r;
         record_of(tr, now_us, &r);
-        mvt_real d2;
-        if (record_test(self, &r, x, cov, obs, now_us, &d2) && (best < 0 || d2 < best_d2)) {
-            best_d2 = d2;
+        mvt_real score;
+        if (record_test(self, &r, x, cov, obs, now_us, &score) && (best < 0 || score < best_score)) {
+            best_score = score;
             best = t;
         }
     }
-    mvt_real rec_d2;
-    if (best < 0 || (nearest_record(self, x, cov, obs, now_us, &rec_d2) >= 0 && rec_d2 < best_d2)) {
+    mvt_real rec_score;
+    if (best < 0 || (nearest_record(self, x, cov, obs, now_us, &rec_score) >= 0 && rec_score < best_score)) {
         return; /* none in reach, or a deleted track's record is nearer: recovery gives that one */
     }
     mvt_track_t *tr = &self->tracks[best];
@@ -179,8 +179,8 @@ void mvt_trk_release_contradicted(mvt_tracker_t *self, const mvt_real x[3], cons
 int32_t mvt_trk_recover(mvt_tracker_t *self, const mvt_real x[3], const mvt_real cov[9], const mvt_app_obs_t *obs,
                         int64_t now_us, mvt_lost_t *held)
 {
-    mvt_real d2;
-    const int best = nearest_record(self, x, cov, obs, now_us, &d2);
+    mvt_real score;
+    const int best = nearest_record(self, x, cov, obs, now_us, &score);
     if (best < 0) {
         return 0;
     }
