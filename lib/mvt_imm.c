@@ -564,15 +564,16 @@ mvt_err_t mvt_imm_update_pos(mvt_imm_t *imm, const mvt_imm_config_t *c, int m, c
     return update(imm, c, m, H, y, noise, s, 3);
 }
 
-mvt_err_t mvt_imm_truncate_ground(mvt_imm_t *imm, const mvt_imm_config_t *c, const mvt_real H[3], mvt_real value,
-                                  mvt_real extra_var, mvt_real lo, mvt_real hi, mvt_cv_state_t *s)
+static mvt_err_t truncate_models(mvt_imm_t *imm, const mvt_imm_config_t *c, const mvt_real H[3], mvt_real value,
+                                 mvt_real extra_var, mvt_real lo, mvt_real hi, mvt_cv_state_t *s, int ground)
 {
     const int n = c->n;
     mvt_imm_t tmp = *imm;
     for (int j = 0; j < n; j++) {
         const mvt_real *xj = tmp.m[j].x;
         const mvt_real vj = value + H[0] * (xj[0] - s->x[0]) + H[1] * (xj[1] - s->x[1]) + H[2] * (xj[2] - s->x[2]);
-        const mvt_err_t err = mvt_cv_truncate_ground(&tmp.m[j], H, vj, extra_var, lo, hi, NULL);
+        const mvt_err_t err = ground ? mvt_cv_truncate_ground(&tmp.m[j], H, vj, extra_var, lo, hi, NULL)
+                                     : mvt_cv_truncate_ex(&tmp.m[j], H, vj, extra_var, lo, hi, NULL);
         if (err != MVT_OK) {
             return err;
         }
@@ -580,6 +581,18 @@ mvt_err_t mvt_imm_truncate_ground(mvt_imm_t *imm, const mvt_imm_config_t *c, con
     *imm = tmp;
     mvt_imm_combine(imm, c, s);
     return MVT_OK;
+}
+
+mvt_err_t mvt_imm_truncate(mvt_imm_t *imm, const mvt_imm_config_t *c, const mvt_real H[3], mvt_real value,
+                           mvt_real extra_var, mvt_real lo, mvt_real hi, mvt_cv_state_t *s)
+{
+    return truncate_models(imm, c, H, value, extra_var, lo, hi, s, 0);
+}
+
+mvt_err_t mvt_imm_truncate_ground(mvt_imm_t *imm, const mvt_imm_config_t *c, const mvt_real H[3], mvt_real value,
+                                  mvt_real extra_var, mvt_real lo, mvt_real hi, mvt_cv_state_t *s)
+{
+    return truncate_models(imm, c, H, value, extra_var, lo, hi, s, 1);
 }
 
 mvt_err_t mvt_imm_repair(mvt_imm_t *imm, const mvt_imm_config_t *c, mvt_cv_state_t *s, mvt_real var_floor)

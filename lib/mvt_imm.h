@@ -133,8 +133,11 @@ mvt_err_t mvt_imm_predict_to_pos(mvt_imm_t *imm, const mvt_imm_config_t *c, int6
 mvt_err_t mvt_imm_update_pos(mvt_imm_t *imm, const mvt_imm_config_t *c, int m, const mvt_real *H, const mvt_real *y,
                              const mvt_real *noise, mvt_cv_state_t *s);
 
-/* mvt_cv_truncate_ground on every model (value moved by H (x_j - x)), then recombined. The
- * truncation's mass is not evidence for one motion model over another: mu is left as it is. */
+/* mvt_cv_truncate_ex (mvt_imm_truncate) or mvt_cv_truncate_ground on every model (value moved by
+ * H (x_j - x)), then recombined. The truncation's mass is not evidence for one motion model over
+ * another: mu is left as it is. */
+mvt_err_t mvt_imm_truncate(mvt_imm_t *imm, const mvt_imm_config_t *c, const mvt_real H[3], mvt_real value,
+                           mvt_real extra_var, mvt_real lo, mvt_real hi, mvt_cv_state_t *s);
 mvt_err_t mvt_imm_truncate_ground(mvt_imm_t *imm, const mvt_imm_config_t *c, const mvt_real H[3], mvt_real value,
                                   mvt_real extra_var, mvt_real lo, mvt_real hi, mvt_cv_state_t *s);
 

@@ -165,8 +165,7 @@ static void step_projective(mvt_tracker_t *self, const mvt_frame_t *frame, const
                 continue;
             }
             mvt_pkf_innov_t in;
-            const mvt_real *extra =
-                c->merge == MVT_MERGE_SHARE && self->merge_nb[t] >= 0 ? self->merge_cov[t] : NULL;
+            const mvt_real *extra = self->merge_wide[t] ? self->merge_cov[t] : NULL;
             mvt_err_t err = mvt_pkf_innovation_from(&self->pred[t], &self->meas[k][assign[t]], extra, &in);
             if (err == MVT_OK) {
                 err = mvt_trk_update_pkf(self, tr, &in, extra);
@@ -336,6 +335,7 @@ mvt_err_t mvt_tracker_step(mvt_tracker_t *self, const mvt_frame_t *frame, mvt_ou
     if (self->cfg.exclusion_m > MVT_R(0.0)) {
         mvt_trk_exclusion(self);
     }
+    mvt_trk_hold_height(self);
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         if (self->tracks[t].id != 0) {
             mvt_trk_predict(self, &self->tracks[t], frame->utime_us);

@@ -333,6 +333,7 @@ typedef struct mvt_tracker {
     uint8_t pred_ok[MVT_MAX_TARGETS];
     int16_t merge_nb[MVT_MAX_TARGETS];       /* nearest unresolved track in this view, or -1 */
     mvt_real merge_cov[MVT_MAX_TARGETS][3];  /* extra measurement covariance, px^2 */
+    uint8_t merge_wide[MVT_MAX_TARGETS];     /* the update with this view's detection adds merge_cov */
     int16_t cluster[MVT_MAX_TARGETS];        /* union-find parent */
     int16_t det_first[MVT_MAX_DETECTIONS];   /* first track gating detection d, or -1 */
     int16_t cl_rows[MVT_MAX_TARGETS];

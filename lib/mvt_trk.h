@@ -22,6 +22,7 @@ static inline int mvt_trk_popcount(uint32_t x)
 /* The spread of a person's head-top height over seconds (gait bob, posture), metres: the height
  * cue of re-acquisition and of identity recovery. */
 #define MVT_TRK_HEAD_SD_M MVT_R(0.04)
+#define MVT_TRK_HEIGHT_BAND MVT_R(3.0)
 /* chi-square, 3 degrees of freedom, 99.9 %: the gate of both */
 #define MVT_TRK_GATE3 MVT_R(16.27)
 
@@ -146,6 +147,11 @@ mvt_real mvt_trk_odds(const mvt_tracker_t *self, uint32_t support, int empty);
  * cameras is kept exclusion_m (horizontally) from every track seen in at least that many. O(T^2). */
 void mvt_trk_exclusion(mvt_tracker_t *self);
 
+/* After the frame's updates: a confirmed track seen in fewer than seen_min_views cameras keeps its
+ * head height within MVT_TRK_HEIGHT_BAND standard deviations of the height last seen (seen_z,
+ * its variance plus MVT_TRK_HEAD_SD_M squared). O(T). */
+void mvt_trk_hold_height(mvt_tracker_t *self);
+
 /* Confirmation, coasting and deletion after the frame's updates. O(T). */
 void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us);
 
@@ -178,6 +184,8 @@ void mvt_trk_predict_pos(mvt_tracker_t *self, mvt_track_t *tr, int64_t utime_us)
 mvt_err_t mvt_trk_update_pkf(mvt_tracker_t *self, mvt_track_t *tr, const mvt_pkf_innov_t *in, const mvt_real *extra_px2);
 void mvt_trk_settle(mvt_tracker_t *self, mvt_track_t *tr);
 mvt_err_t mvt_trk_update_point(mvt_tracker_t *self, mvt_track_t *tr, const mvt_real z[3], const mvt_real R[9]);
+mvt_err_t mvt_trk_truncate(mvt_tracker_t *self, mvt_track_t *tr, const mvt_real H[3], mvt_real value, mvt_real lo,
+                           mvt_real hi);
 mvt_err_t mvt_trk_truncate_ground(mvt_tracker_t *self, mvt_track_t *tr, const mvt_real H[3], mvt_real value,
                                   mvt_real extra_var, mvt_real lo, mvt_real hi);
 mvt_err_t mvt_trk_repair(mvt_tracker_t *self, mvt_track_t *tr);

@@ -57,6 +57,16 @@ static mvt_real miss_cost(const mvt_tracker_t *self, int t)
     return c->gate_chi2 - self->app_shift[t];
 }
 
+/* The second moment D D^T / 3 (packed xx xy yy) of a uniform offset of up to D = (dx, dy) pixels
+ * along D: where in a merged blob its top point lies, seen from one of its heads. */
+static void offset_cov(mvt_real dx, mvt_real dy, mvt_real cov[3])
+{
+    const mvt_real third = MVT_R(1.0) / MVT_R(3.0);
+    cov[0] = dx * dx * third;
+    cov[1] = dx * dy * third;
+    cov[2] = dy * dy * third;
+}
+
 /* Squared image distance between two predictions and the squared merge radius in pixels. */
 static int unresolved(const mvt_tracker_t *self, const mvt_camera_t *cam, int t, int u, mvt_real *d2_px)
 {
@@ -132,7 +142,8 @@ static int blob_holds_two(const mvt_view_t *view, int d, const mvt_real heads[][
 
 /* The predicted heads of the seen (confirmed or coasting) tracks in camera k, raw pixels, with three
  * standard deviations of the prediction and the pixel noise: [u, v, margin u, margin v]. */
-static int seen_heads(const mvt_tracker_t *self, int k, const int live[], int n_live, mvt_real heads[][4])
+static int seen_heads(const mvt_tracker_t *self, int k, const int live[], int n_live, mvt_real heads[][4],
+                      int16_t who[])
 {
     const mvt_camera_t *cam = &self->cams[k];
     int n = 0;
@@ -151,7 +162,7 @@ static int seen_heads(const mvt_tracker_t *self, int k, const int live[], int n_
         }
         h[2] = MVT_R(3.0) * MVT_SQRT(p->hph[0] + cam->sigma_px * cam->sigma_px);
         h[3] = MVT_R(3.0) * MVT_SQRT(p->hph[2] + cam->sigma_px * cam->sigma_px);
-        n++;
+        who[n++] = (int16_t)t;
     }
     return n;
 }
@@ -165,6 +176,7 @@ static void hypothesise(mvt_tracker_t *self, const mvt_view_t *view, int k, cons
     for (int i = 0; i < n_live; i++) {
         const int t = live[i];
         self->merge_nb[t] = -1;
+        self->merge_wide[t] = 0;
         const mvt_err_t err = mvt_pkf_predict_obs(&self->tracks[t].s, cam, lin, &self->pred[t]);
         self->pred_ok[t] = err == MVT_OK && in_picture(cam, &self->pred[t]);
         if (err == MVT_OK && !self->pred_ok[t]) {
@@ -204,18 +216,16 @@ static void hypothesise(mvt_tracker_t *self, const mvt_view_t *view, int k, cons
                 continue;
             }
             const mvt_pkf_pred_t *a = &self->pred[t], *b = &self->pred[self->merge_nb[t]];
-            const mvt_real dx = a->h[0] - b->h[0], dy = a->h[1] - b->h[1];
-            const mvt_real third = MVT_R(1.0) / MVT_R(3.0);
-            self->merge_cov[t][0] = dx * dx * third;
-            self->merge_cov[t][1] = dx * dy * third;
-            self->merge_cov[t][2] = dy * dy * third;
+            offset_cov(a->h[0] - b->h[0], a->h[1] - b->h[1], self->merge_cov[t]);
+            self->merge_wide[t] = c->merge == MVT_MERGE_SHARE;
         }
     }
     for (int i = 0; i < n_live; i++) { /* the colour's shift (app_cost), once per track and camera */
         self->app_shift[live[i]] = mvt_trk_app_cost_min(&self->tracks[live[i]].app);
     }
     mvt_real heads[MVT_MAX_TARGETS][4];
-    const int n_heads = seen_heads(self, k, live, n_live, heads);
+    int16_t who[MVT_MAX_TARGETS];
+    const int n_heads = seen_heads(self, k, live, n_live, heads, who);
     uint8_t two_checked[MVT_MAX_DETECTIONS]; /* blob_holds_two asked of detection d yet (lazily: only
                                                  gated detections' colour is used) */
     memset(two_checked, 0, sizeof(two_checked));
@@ -334,6 +344,47 @@ static void solve_cluster(mvt_tracker_t *self, int k, int r, const int live[], i
         if (j >= 0 && j < nc) {
             assign[self->cl_rows[i]] = self->cl_cols[j];
         }
+    }
+}
+
+/* A detection whose blob also holds another person's predicted head (a confirmed or coasting
+ * track's, within three standard deviations of the box) is the top of a region two people share.
+ * Its top is the head higher in the picture, or a point between two heads at about the same
+ * height (a component's top rows span both). Seen from the track it was given to, the point is
+ * its head displaced by up to D toward the other head, D the two predictions' image separation:
+ * a uniform offset of second moment D D^T / 3 is added to the measurement covariance
+ * (merge_cov, as MVT_MERGE_SHARE does for the tracks it updates with one detection), so the
+ * update pulls the track along D only as far as the blob says. The nearest such head counts; one
+ * clearly lower in the picture than the track's own (top_order) does not, the top being the
+ * track's. Without it, a track whose person is hidden in a merged blob took the between-heads point and
+ * jumped onto the neighbour (docs/tracking.md, "Merged blobs' tops, and heights nobody places"). */
+static void widen_merged_tops(mvt_tracker_t *self, const mvt_view_t *view, int k, const int live[], int n_live,
+                              const int assign[])
+{
+    mvt_real heads[MVT_MAX_TARGETS][4];
+    int16_t who[MVT_MAX_TARGETS];
+    const int n_heads = seen_heads(self, k, live, n_live, heads, who);
+    for (int i = 0; i < n_live; i++) {
+        const int t = live[i], d = assign[t];
+        if (d < 0 || !mvt_trk_box_ok(view->det[d].box)) {
+            continue;
+        }
+        const mvt_real *ht = self->pred[t].h;
+        mvt_real best = MVT_R(-1.0);
+        for (int j = 0; j < n_heads; j++) {
+            const int u = who[j];
+            if (u == t || !mvt_trk_in_box(view->det[d].box, heads[j], heads[j][2], heads[j][3]) ||
+                top_order(self, t, u) < 0) {
+                continue;
+            }
+            const mvt_real dx = self->pred[u].h[0] - ht[0], dy = self->pred[u].h[1] - ht[1];
+            const mvt_real d2 = dx * dx + dy * dy;
+            if (best < MVT_R(0.0) || d2 < best) {
+                best = d2;
+                offset_cov(dx, dy, self->merge_cov[t]);
+            }
+        }
+        self->merge_wide[t] = best > MVT_R(0.0);
     }
 }
 
@@ -457,6 +508,9 @@ void mvt_trk_associate(mvt_tracker_t *self, const mvt_view_t *view, int k, int a
                 assign[t] = -1;
             }
         }
+    }
+    if (self->cfg.merge == MVT_MERGE_NEITHER || self->cfg.merge == MVT_MERGE_TOP) {
+        widen_merged_tops(self, view, k, live, n_live, assign);
     }
     for (int i = 0; i < n_live; i++) {
         if (assign[live[i]] >= 0) {

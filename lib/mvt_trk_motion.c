@@ -84,6 +84,15 @@ mvt_err_t mvt_trk_update_point(mvt_tracker_t *self, mvt_track_t *tr, const mvt_r
     return mvt_imm_update(&tr->imm, &self->cfg.motion, 3, eye3, y, R, &tr->s);
 }
 
+mvt_err_t mvt_trk_truncate(mvt_tracker_t *self, mvt_track_t *tr, const mvt_real H[3], mvt_real value, mvt_real lo,
+                           mvt_real hi)
+{
+    if (single(self)) {
+        return mvt_cv_truncate(&tr->s, H, value, lo, hi, NULL);
+    }
+    return mvt_imm_truncate(&tr->imm, &self->cfg.motion, H, value, MVT_R(0.0), lo, hi, &tr->s);
+}
+
 mvt_err_t mvt_trk_truncate_ground(mvt_tracker_t *self, mvt_track_t *tr, const mvt_real H[3], mvt_real value,
                                   mvt_real extra_var, mvt_real lo, mvt_real hi)
 {

@@ -283,3 +283,32 @@ void mvt_trk_exclusion(mvt_tracker_t *self)
         }
     }
 }
+
+/* A head's height is what a camera that sees a person alone along its ray cannot tell: a track
+ * updated by one view (a ceiling camera over a group that hides the person from the others) moves
+ * along that ray, and its height follows the cross-covariance the ray leaves. The person's head,
+ * though, stays within a few centimetres of its height while they walk or stand (the cue that
+ * re-acquisition and recovery compare, MVT_TRK_HEAD_SD_M). So until two views place the track
+ * again, its height is truncated to that band around the height they last placed it at (PDF
+ * truncation, mvt_cv_truncate: a height inside the band is left as it is, one outside is brought
+ * to its edge with the position following through the covariance). Without it, a short person
+ * hidden in a group for 3 s sank to 0.3 m under the ceiling camera (tests/test_multi.c,
+ * hidden_in_group) and a track whose update was weakened by a merged blob's top went below the
+ * floor. A person sitting down while nobody places them is held up until two views do. */
+void mvt_trk_hold_height(mvt_tracker_t *self)
+{
+    const mvt_tracker_config_t *c = &self->cfg;
+    const int min_views = c->seen_min_views < self->num_cameras ? c->seen_min_views : self->num_cameras;
+    static const mvt_real Hz[3] = {MVT_R(0.0), MVT_R(0.0), MVT_R(1.0)};
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        mvt_track_t *tr = &self->tracks[t];
+        if (tr->id == 0 || tr->status == MVT_TRACK_TENTATIVE || mvt_trk_popcount(tr->cameras_used) >= min_views) {
+            continue;
+        }
+        const mvt_real w = MVT_TRK_HEIGHT_BAND * MVT_SQRT(tr->seen_zz + MVT_TRK_HEAD_SD_M * MVT_TRK_HEAD_SD_M);
+        const mvt_err_t err = mvt_trk_truncate(self, tr, Hz, tr->s.x[2], tr->seen_z - w, tr->seen_z + w);
+        if (err != MVT_OK && err != MVT_ERR_NUMERIC) {
+            self->counters.numeric_faults++;
+        }
+    }
+}

@@ -734,10 +734,13 @@ static void test_mvt_tracker_step_person_lost_and_back_keeps_identity(void **sta
 /* A short person walks into the middle of a group of three tall ones, stands there 3 s (hidden in
  * their blobs in most views: never two views' top point), and walks out. Returns the number of
  * distinct identities the short person had while confirmed; fills the closest horizontal distance
- * of the short person's track to a tall person's track while hidden. */
+ * of the short person's track to a tall person's track while hidden, and g_sank_m. */
+static double g_sank_m; /* hidden_in_group: the short person's track's largest height error while confirmed */
+
 static int hidden_in_group(int occlusion, double *closest_m, int *covered)
 {
     *covered = 0;
+    g_sank_m = 0.0;
     init();
     g_tracker.cfg.occlusion = occlusion;
     /* the occlusion reasoning alone, with the single constant-velocity model this scene was built
@@ -783,6 +786,10 @@ static int hidden_in_group(int occlusion, double *closest_m, int *covered)
             }
         }
         *covered += id != 0;
+        if (me != NULL) {
+            const double dz = fabs((double)me->pos_m[2] - (double)X[0][2]);
+            g_sank_m = dz > g_sank_m ? dz : g_sank_m;
+        }
         if (id != 0 && (nid == 0 || ids[nid - 1] != id) && nid < 8) {
             ids[nid++] = id;
         }
@@ -817,6 +824,9 @@ static void test_mvt_tracker_step_hidden_in_group_keeps_identity(void **state)
     assert_int_equal(g_tracker.counters.births, 4);
     /* exclusion: the hidden track never sat on a tall person's track */
     assert_true(closest > 0.3);
+    /* the ceiling camera alone updated it for seconds: its height held (mvt_trk_hold_height; it
+     * sank 1.2 m before) */
+    assert_true(g_sank_m < 0.2);
 }
 
 /* A person vanishes in the middle of the room while two others stay in view: with boxes, the
