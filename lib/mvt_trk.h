@@ -22,6 +22,8 @@ static inline int mvt_trk_popcount(uint32_t x)
 /* The spread of a person's head-top height over seconds (gait bob, posture), metres: the height
  * cue of re-acquisition and of identity recovery. */
 #define MVT_TRK_HEAD_SD_M MVT_R(0.04)
+/* A track that fewer than two views place keeps its height within this many standard deviations
+ * of the height last placed (mvt_trk_hold_height). */
 #define MVT_TRK_HEIGHT_BAND MVT_R(3.0)
 /* chi-square, 3 degrees of freedom, 99.9 %: the gate of both */
 #define MVT_TRK_GATE3 MVT_R(16.27)
