@@ -167,7 +167,10 @@ static int seen_heads(const mvt_tracker_t *self, int k, const int live[], int n_
     return n;
 }
 
-static void hypothesise(mvt_tracker_t *self, const mvt_view_t *view, int k, const int live[], int n_live)
+/* The predicted heads of the seen tracks in camera k (seen_heads: heads, who), returned as their
+ * count for the merged blobs' tests after the assignment too. */
+static int hypothesise(mvt_tracker_t *self, const mvt_view_t *view, int k, const int live[], int n_live,
+                       mvt_real heads[][4], int16_t who[])
 {
     const mvt_tracker_config_t *c = &self->cfg;
     const mvt_camera_t *cam = &self->cams[k];
@@ -223,8 +226,6 @@ static void hypothesise(mvt_tracker_t *self, const mvt_view_t *view, int k, cons
     for (int i = 0; i < n_live; i++) { /* the colour's shift (app_cost), once per track and camera */
         self->app_shift[live[i]] = mvt_trk_app_cost_min(&self->tracks[live[i]].app);
     }
-    mvt_real heads[MVT_MAX_TARGETS][4];
-    int16_t who[MVT_MAX_TARGETS];
     const int n_heads = seen_heads(self, k, live, n_live, heads, who);
     uint8_t two_checked[MVT_MAX_DETECTIONS]; /* blob_holds_two asked of detection d yet (lazily: only
                                                  gated detections' colour is used) */
@@ -279,7 +280,7 @@ static void hypothesise(mvt_tracker_t *self, const mvt_view_t *view, int k, cons
         }
     }
     if (!self->reacq_any) {
-        return;
+        return n_heads;
     }
     /* re-acquisition (mvt_trk_reacquire): a reserved detection is its track's only choice here,
      * and no other track's */
@@ -300,6 +301,7 @@ static void hypothesise(mvt_tracker_t *self, const mvt_view_t *view, int k, cons
             }
         }
     }
+    return n_heads;
 }
 
 /* Solves one cluster (tracks with root r) with the Hungarian method. */
@@ -359,12 +361,9 @@ static void solve_cluster(mvt_tracker_t *self, int k, int r, const int live[], i
  * track's. Without it, a track whose person is hidden in a merged blob took the between-heads
  * point and jumped onto the neighbour (docs/tracking.md, "Merged blobs' tops, and heights nobody
  * places"). */
-static void widen_merged_tops(mvt_tracker_t *self, const mvt_view_t *view, int k, const int live[], int n_live,
-                              const int assign[])
+static void widen_merged_tops(mvt_tracker_t *self, const mvt_view_t *view, const int live[], int n_live,
+                              const int assign[], const mvt_real heads[][4], const int16_t who[], int n_heads)
 {
-    mvt_real heads[MVT_MAX_TARGETS][4];
-    int16_t who[MVT_MAX_TARGETS];
-    const int n_heads = seen_heads(self, k, live, n_live, heads, who);
     for (int i = 0; i < n_live; i++) {
         const int t = live[i], d = assign[t];
         if (d < 0 || !mvt_trk_box_ok(view->det[d].box)) {
@@ -402,7 +401,9 @@ void mvt_trk_associate(mvt_tracker_t *self, const mvt_view_t *view, int k, int a
             live[n_live++] = t;
         }
     }
-    hypothesise(self, view, k, live, n_live);
+    mvt_real heads[MVT_MAX_TARGETS][4];
+    int16_t who[MVT_MAX_TARGETS];
+    const int n_heads = hypothesise(self, view, k, live, n_live, heads, who);
 
     /* clusters: tracks linked by a detection inside both gates */
     const int nd = self->num_meas[k];
@@ -511,7 +512,7 @@ void mvt_trk_associate(mvt_tracker_t *self, const mvt_view_t *view, int k, int a
         }
     }
     if (self->cfg.merge == MVT_MERGE_NEITHER || self->cfg.merge == MVT_MERGE_TOP) {
-        widen_merged_tops(self, view, k, live, n_live, assign);
+        widen_merged_tops(self, view, live, n_live, assign, (const mvt_real(*)[4])heads, who, n_heads);
     }
     for (int i = 0; i < n_live; i++) {
         if (assign[live[i]] >= 0) {

@@ -41,7 +41,7 @@ static void delete_duplicates(mvt_tracker_t *self, int64_t now_us)
     if (!(r2 > MVT_R(0.0))) {
         return;
     }
-    const int min_views = self->cfg.seen_min_views < self->num_cameras ? self->cfg.seen_min_views : self->num_cameras;
+    const int min_views = mvt_trk_min_views(self);
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         mvt_track_t *a = &self->tracks[t];
         for (int u = t + 1; u < MVT_MAX_TARGETS && a->id != 0; u++) {
@@ -74,7 +74,7 @@ void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us)
 {
     const mvt_tracker_config_t *c = &self->cfg;
     const uint32_t window = c->confirm_window >= 32 ? 0xffffffffu : ((1u << c->confirm_window) - 1u);
-    const int min_views = c->seen_min_views < self->num_cameras ? c->seen_min_views : self->num_cameras;
+    const int min_views = mvt_trk_min_views(self);
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         mvt_track_t *tr = &self->tracks[t];
         if (tr->id == 0) {

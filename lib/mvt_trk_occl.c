@@ -240,7 +240,7 @@ static mvt_real horiz_var(const mvt_cv_state_t *s, const mvt_real n[3])
 void mvt_trk_exclusion(mvt_tracker_t *self)
 {
     const mvt_tracker_config_t *c = &self->cfg;
-    const int min_views = c->seen_min_views < self->num_cameras ? c->seen_min_views : self->num_cameras;
+    const int min_views = mvt_trk_min_views(self);
     for (int a = 0; a < MVT_MAX_TARGETS; a++) {
         mvt_track_t *ta = &self->tracks[a];
         if (ta->id == 0 || ta->status == MVT_TRACK_TENTATIVE) {
@@ -297,8 +297,7 @@ void mvt_trk_exclusion(mvt_tracker_t *self)
  * floor. A person sitting down while nobody places them is held up until two views do. */
 void mvt_trk_hold_height(mvt_tracker_t *self)
 {
-    const mvt_tracker_config_t *c = &self->cfg;
-    const int min_views = c->seen_min_views < self->num_cameras ? c->seen_min_views : self->num_cameras;
+    const int min_views = mvt_trk_min_views(self);
     static const mvt_real Hz[3] = {MVT_R(0.0), MVT_R(0.0), MVT_R(1.0)};
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         mvt_track_t *tr = &self->tracks[t];
