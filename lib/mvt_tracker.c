@@ -293,6 +293,9 @@ mvt_err_t mvt_tracker_step(mvt_tracker_t *self, const mvt_frame_t *frame, mvt_ou
         self->counters.frames_time_backwards++;
         return MVT_ERR_INVALID;
     }
+    const mvt_real forget = self->have_time ? MVT_EXP(-mvt_us_to_s(frame->utime_us - self->last_utime_us) /
+                                                       MVT_TRK_NEED_MEMORY_S)
+                                            : MVT_R(1.0);
     self->have_time = 1;
     self->last_utime_us = frame->utime_us;
     self->counters.frames++;
@@ -321,6 +324,7 @@ mvt_err_t mvt_tracker_step(mvt_tracker_t *self, const mvt_frame_t *frame, mvt_ou
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         self->tracks[t].cameras_used = 0u;
         self->tracks[t].cameras_occluded = 0u;
+        self->tracks[t].need_llr *= forget;
         self->tracks[t].cameras_uncovered = 0u;
         self->tracks[t].cameras_empty = 0u;
         self->ev_llr[t] = MVT_R(0.0);

@@ -118,7 +118,9 @@ typedef struct mvt_tracker_config {
     mvt_real body_halfwidth_m;  /* half a person's width: a hidden head lies at least this far
                                    inside the blob's side edges; >= 0, default 0.2 */
     mvt_real occluded_max_s;    /* a track kept alive by occluded views alone is deleted after this
-                                   long without enough real views; > 0, default 10 */
+                                   long neither seen nor needed by its hiding blobs' boxes (a person
+                                   right behind others leaves no trace in them: the guard against
+                                   phantoms in a group); > 0, default 10 */
     int contra_views;           /* a track not seen this frame whose place is in no blob in at least
                                    this many views (with boxes) is contradicted: it is not hidden
                                    and it is not there; >= 1, default 2 */
@@ -218,7 +220,7 @@ typedef struct mvt_counters {
     uint64_t deleted_exit;            /*   unseen for exit_coast_s near a side wall */
     uint64_t deleted_uncertain;       /*   position std above max_pos_std_m */
     uint64_t deleted_outside;         /*   left the volume (plus margin) */
-    uint64_t deleted_occluded;        /*   kept by occluded views alone for occluded_max_s */
+    uint64_t deleted_occluded;        /*   hidden, and neither seen nor needed, for occluded_max_s */
     uint64_t deleted_contradicted;    /*   unseen and in no blob in contra_views views for contra_max_s */
     uint64_t merged_updates;          /* MVT_MERGE_SHARE: updates from a detection shared by
                                          unresolved tracks */
@@ -284,6 +286,10 @@ typedef struct mvt_track {
     int64_t last_update_us;     /* last frame seen */
     int64_t last_explained_us;  /* last frame seen, or seen and hidden in enough views */
     int64_t last_consistent_us; /* last frame seen, or contradicted by fewer than contra_views */
+    int64_t last_needed_us;     /* last frame seen, or hidden where the blobs' boxes need the person */
+    mvt_real need_llr;          /* the boxes' evidence for a hidden track's person: log-likelihood
+                                   ratio of the hiding blobs' edges, with against without them,
+                                   forgotten with time constant MVT_TRK_NEED_MEMORY_S */
     mvt_real exist_llr;         /* tentative: log-likelihood ratio, person against clutter, of the
                                    detections in its gates since its birth frame (mvt_trk_delete) */
     mvt_real seen_z, seen_zz;   /* head height and its variance the last frame seen: a coasting

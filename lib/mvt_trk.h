@@ -31,6 +31,10 @@ static inline int mvt_trk_popcount(uint32_t x)
 /* A track that fewer than two views place keeps its height within this many standard deviations
  * of the height last placed (mvt_trk_hold_height). */
 #define MVT_TRK_HEIGHT_BAND MVT_R(3.0)
+
+/* How long the boxes' evidence for a hidden person is remembered (need_llr), s: a second of frames
+ * outweighs one noisy box edge, and a person who left stops being needed within a few seconds. */
+#define MVT_TRK_NEED_MEMORY_S MVT_R(1.0)
 /* chi-square, 3 degrees of freedom, 99.9 %: the gate of both */
 #define MVT_TRK_GATE3 MVT_R(16.27)
 

@@ -5,7 +5,8 @@
  * position is still well determined (seen_max_std_m). A tentative track is
  * confirmed after confirm_hits seen frames among the last confirm_window
  * and deleted after tentative_max_misses consecutive misses. A confirmed track that no camera
- * updated this frame is COASTING; it is deleted once unseen for coast_max_s, when its position
+ * updated this frame is COASTING; it is deleted once unseen for coast_max_s (or, hidden in other
+ * tracks' blobs, once neither seen nor needed by their boxes for occluded_max_s), when its position
  * standard deviation exceeds max_pos_std_m on any axis, when it leaves the volume (plus margin),
  * or when its covariance cannot be repaired. A track unseen for exit_coast_s near the volume's
  * side walls is deleted sooner (people leave through the sides). Of two tracks closer than
@@ -100,10 +101,14 @@ void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us)
             tr->misses = 0;
             tr->last_update_us = now_us;
             tr->last_explained_us = now_us;
+            tr->last_needed_us = now_us;
         } else {
             tr->misses++;
             if (!contradicted && views + mvt_trk_popcount(tr->cameras_occluded) >= min_views) {
                 tr->last_explained_us = now_us; /* hidden in other tracks' blobs, not lost */
+                if (tr->need_llr > MVT_R(0.0)) {
+                    tr->last_needed_us = now_us; /* ... and a blob needs the person */
+                }
             }
         }
         uint64_t *reason = NULL; /* the counter of the deletion's reason */
@@ -113,8 +118,8 @@ void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us)
         }
         const mvt_real *P = tr->s.P;
         const mvt_real var_max = c->max_pos_std_m * c->max_pos_std_m;
-        const mvt_real unseen_s = mvt_us_to_s(now_us - tr->last_update_us);
         const mvt_real lost_s = mvt_us_to_s(now_us - tr->last_explained_us);
+        const mvt_real unneeded_s = mvt_us_to_s(now_us - tr->last_needed_us);
         switch (tr->status) {
         case MVT_TRACK_TENTATIVE:
             /* existence: the evidence of the detections in its gates since the birth frame
@@ -132,7 +137,7 @@ void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us)
             tr->status = tr->cameras_used != 0u ? MVT_TRACK_CONFIRMED : MVT_TRACK_COASTING;
             if (lost_s > c->coast_max_s) {
                 reason = &self->counters.deleted_unseen;
-            } else if (unseen_s > c->occluded_max_s) {
+            } else if (unneeded_s > c->occluded_max_s) {
                 reason = &self->counters.deleted_occluded;
             } else if (mvt_us_to_s(now_us - tr->last_consistent_us) > c->contra_max_s) {
                 reason = &self->counters.deleted_contradicted;

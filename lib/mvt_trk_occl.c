@@ -20,11 +20,21 @@
  * bounds its covariance while it is hidden.
  *
  * The view then counts toward keeping the track alive (mvt_trk_delete: seen views plus occluded
- * views >= seen_min_views), for at most occluded_max_s. It never counts as a hit toward
- * confirmation, and a blob without a box (all zero) explains nothing.
+ * views >= seen_min_views). It never counts as a hit toward confirmation, and a blob without a box
+ * (all zero) explains nothing.
+ *
+ * Whether the blob needs the hidden person (extent_llr): a blob's box is the union of its people's
+ * silhouettes, so a person hidden beside or in front of the one whose top it reports widens or
+ * lowers it, and one right behind leaves no trace. The log-likelihood ratio of the box's edges,
+ * with the track's predicted silhouette against without it, accumulates in need_llr (forgotten
+ * over MVT_TRK_NEED_MEMORY_S); while it is positive the track's hidden life is renewed, and a track
+ * nothing has needed or seen for occluded_max_s is deleted. Before, hidden life ended
+ * occluded_max_s after the last frame seen, whatever the boxes said: four people queued for 20 s
+ * along two cameras' axes lost two of them (random rig 12, docs/tracking.md).
  */
 #include <math.h>
 #include <stddef.h>
+#include <string.h>
 
 #include "mvt_trk.h"
 
@@ -135,6 +145,98 @@ static mvt_real empty_slack(const mvt_camera_t *cam, const mvt_pkf_pred_t *p)
     return MVT_R(3.0) * cam->sigma_px + MVT_R(2.0) * MVT_SQRT(s2) + MVT_R(8.0);
 }
 
+/* How much a silhouette's half width varies about body_halfwidth_m (arms, clothes, pose), m. */
+#define OCCL_BODY_SD_M MVT_R(0.05)
+
+/* A person's silhouette in camera k as the tracker predicts it, raw pixels: the column from the
+ * head (uv) down to the feet (the ground point below it) widened by body_halfwidth_m at the head's
+ * depth. 0 when the feet do not project. */
+static int silhouette(const mvt_tracker_t *self, int k, const mvt_real x[3], const mvt_real head[2], mvt_real depth,
+                      mvt_real sil[4])
+{
+    const mvt_camera_t *cam = &self->cams[k];
+    const mvt_real ground[3] = {x[0], x[1], MVT_R(0.0)};
+    mvt_real foot[2];
+    if (mvt_cam_project(cam, ground, foot, NULL) != MVT_OK || !(depth > MVT_R(0.0))) {
+        return 0;
+    }
+    const mvt_real w = cam->fx * self->cfg.body_halfwidth_m / depth;
+    sil[0] = (head[0] < foot[0] ? head[0] : foot[0]) - w;
+    sil[1] = head[1];
+    sil[2] = (head[0] > foot[0] ? head[0] : foot[0]) + w;
+    sil[3] = foot[1];
+    return 1;
+}
+
+/* -2 ln of a Gaussian edge likelihood ratio: box edge e predicted at a (with the track's person) or
+ * b (without), standard deviation s. */
+static mvt_real edge_llr(mvt_real e, mvt_real a, mvt_real b, mvt_real s2)
+{
+    return MVT_R(0.5) * ((e - b) * (e - b) - (e - a) * (e - a)) / s2;
+}
+
+/* Does blob d's box need hidden track t? The box is the union of the silhouettes of the people in
+ * the blob. Its left, right and bottom edges are predicted from the other seen tracks whose heads
+ * the box holds, with and without t's silhouette (sil_t), each edge with the detection's noise,
+ * OCCL_BODY_SD_M at the depth and the prediction's spread. Returns the log-likelihood ratio of the
+ * three edges, t in the blob against t absent: > 0 when the box reaches out where only t's body
+ * would put it (a person hidden beside or in front of the one whose top the blob reports), < 0 when
+ * t's body would stick out of it (a phantom nearer the camera than the person it hides behind), 0
+ * when the others fill t's silhouette either way (a person right behind another: no information).
+ * Edges at the picture's border, where the box is cut, say nothing. */
+static mvt_real extent_llr(const mvt_tracker_t *self, const mvt_view_t *view, int k, int t, int d,
+                           const mvt_pkf_pred_t *p)
+{
+    const mvt_camera_t *cam = &self->cams[k];
+    const mvt_real *b = view->det[d].box;
+    mvt_real sil_t[4], all[4] = {MVT_R(0.0), MVT_R(0.0), MVT_R(0.0), MVT_R(0.0)};
+    if (!silhouette(self, k, self->tracks[t].s.x, p->h, p->depth_m, sil_t)) {
+        return MVT_R(0.0);
+    }
+    int n = 0;
+    for (int u = 0; u < MVT_MAX_TARGETS; u++) {
+        const mvt_track_t *tu = &self->tracks[u];
+        if (u == t || tu->id == 0 || tu->status == MVT_TRACK_TENTATIVE || !self->pred_ok[u]) {
+            continue;
+        }
+        const mvt_pkf_pred_t *q = &self->pred[u];
+        mvt_real h[2], sil[4];
+        if (mvt_cam_project(cam, tu->s.x, h, NULL) != MVT_OK) {
+            continue;
+        }
+        const mvt_real mu = MVT_R(3.0) * MVT_SQRT(q->hph[0] + cam->sigma_px * cam->sigma_px);
+        const mvt_real mv = MVT_R(3.0) * MVT_SQRT(q->hph[2] + cam->sigma_px * cam->sigma_px);
+        if (!mvt_trk_in_box(b, h, mu, mv) || !silhouette(self, k, tu->s.x, h, q->depth_m, sil)) {
+            continue;
+        }
+        if (n++ == 0) {
+            memcpy(all, sil, sizeof(all));
+        } else {
+            all[0] = sil[0] < all[0] ? sil[0] : all[0];
+            all[2] = sil[2] > all[2] ? sil[2] : all[2];
+            all[3] = sil[3] > all[3] ? sil[3] : all[3];
+        }
+    }
+    if (n == 0) {
+        return MVT_R(0.0); /* nobody else seen in it: the hypothesis "hidden here" is weak anyway */
+    }
+    const mvt_real wsd = cam->fx * OCCL_BODY_SD_M / p->depth_m;
+    const mvt_real s2u = self->meas[k][d].var_px2 + wsd * wsd + p->hph[0];
+    const mvt_real s2v = self->meas[k][d].var_px2 + p->hph[2];
+    const mvt_real edge = MVT_R(2.0); /* px: a box edge this near the border is the picture's */
+    mvt_real llr = MVT_R(0.0);
+    if (b[0] > edge && sil_t[0] < all[0]) {
+        llr += edge_llr(b[0], sil_t[0], all[0], s2u);
+    }
+    if (b[2] < (mvt_real)cam->width - edge && sil_t[2] > all[2]) {
+        llr += edge_llr(b[2], sil_t[2], all[2], s2u);
+    }
+    if (b[3] < (mvt_real)cam->height - edge && sil_t[3] > all[3]) {
+        llr += edge_llr(b[3], sil_t[3], all[3], s2v);
+    }
+    return llr;
+}
+
 void mvt_trk_occlusion(mvt_tracker_t *self, const mvt_view_t *view, int k, const int assign[MVT_MAX_TARGETS])
 {
     const mvt_tracker_config_t *c = &self->cfg;
@@ -224,6 +326,7 @@ void mvt_trk_occlusion(mvt_tracker_t *self, const mvt_view_t *view, int k, const
         if (err == MVT_OK) {
             tr->cameras_occluded |= 1u << k;
             self->counters.occluded_updates++;
+            tr->need_llr += extent_llr(self, view, k, t, best, p);
         } else if (err != MVT_ERR_NUMERIC) {
             self->counters.numeric_faults++;
         }

@@ -5,8 +5,8 @@
  *
  * Why. A track is deleted on evidence that can be wrong for a moment: no camera placed it for
  * coast_max_s (a segmentation that lost a person standing still), it was hidden for
- * occluded_max_s, or views showed its place empty for contra_max_s (its estimate drifted off a
- * hidden person). The person is then born again a few frames later under a new identity: an identity
+ * occluded_max_s with no blob needing it, or views showed its place empty for contra_max_s (its
+ * estimate drifted off a hidden person). The person is then born again a few frames later under a new identity: an identity
  * switch that no association can prevent, because the old track no longer exists. Tracks that
  * left (through a side wall, out of the volume) and tracks too uncertain to have a place are not
  * kept: their person is gone or nowhere in particular. A confirmed duplicate is kept: it is the
