@@ -34,6 +34,7 @@
  * person) the record goes back to the store with its own deadline. Records are kept recover_s
  * after the deletion; when MVT_MAX_LOST are kept, the one nearest its deadline gives way.
  */
+#include <math.h>
 #include <string.h>
 
 #include "mvt_trk.h"
@@ -54,12 +55,12 @@ static mvt_lost_t *free_record(mvt_tracker_t *self, int64_t now_us)
     return best;
 }
 
-/* What mvt_trk_lose would keep of a track, without keeping it. */
-static void record_of(const mvt_track_t *tr, int64_t until_us, mvt_lost_t *r)
+/* What mvt_trk_lose keeps of a track: its person's whereabouts are unknown since lost_us. */
+static void record_of(const mvt_track_t *tr, int64_t lost_us, int64_t until_us, mvt_lost_t *r)
 {
     memset(r, 0, sizeof(*r));
     r->id = tr->id;
-    r->lost_us = tr->last_update_us; /* the person's whereabouts are unknown since */
+    r->lost_us = lost_us;
     r->until_us = until_us;
     for (int i = 0; i < 2; i++) {
         r->x[i] = tr->s.x[i];
@@ -78,7 +79,7 @@ void mvt_trk_lose(mvt_tracker_t *self, const mvt_track_t *tr, int64_t now_us)
     if (!(keep_s > MVT_R(0.0)) || tr->id == 0) {
         return;
     }
-    record_of(tr, now_us + (int64_t)(keep_s * MVT_R(1e6)), free_record(self, now_us));
+    record_of(tr, tr->last_update_us, now_us + (int64_t)(keep_s * MVT_R(1e6)), free_record(self, now_us));
 }
 
 void mvt_trk_give_back(mvt_tracker_t *self, mvt_track_t *tr, int64_t now_us)
@@ -101,6 +102,29 @@ void mvt_trk_confirm(mvt_tracker_t *self, mvt_track_t *tr)
     }
 }
 
+/* Is a birth whose place is d2 (Mahalanobis, covariance S = P + cov) from a record likelier that
+ * record's person than a person new to the room, whose head may be anywhere in the tracked volume
+ * (density 1 / V)? N(d2; S) > 1 / V, i.e. d2 + ln((2 pi)^3 |S|) < 2 ln V. The gate alone let a
+ * record whose person nobody had placed for seconds reach across the room: its walking reach grows
+ * init_vel_std_ms a second, so after 3 s a person entering by a door 2.4 m away was "in reach" and
+ * took the identity (docs/tracking.md, "Hidden for long"). */
+static int likelier_than_new(const mvt_tracker_t *self, const mvt_real P[9], const mvt_real cov[9], mvt_real d2)
+{
+    const mvt_tracker_config_t *c = &self->cfg;
+    mvt_real S[9];
+    for (int i = 0; i < 9; i++) {
+        S[i] = P[i] + cov[i];
+    }
+    const mvt_real det = S[0] * (S[4] * S[8] - S[5] * S[7]) - S[1] * (S[3] * S[8] - S[5] * S[6]) +
+                         S[2] * (S[3] * S[7] - S[4] * S[6]);
+    const mvt_real vol = (c->volume_max[0] - c->volume_min[0]) * (c->volume_max[1] - c->volume_min[1]) *
+                         (c->volume_max[2] - c->volume_min[2]);
+    if (!(det > MVT_R(0.0)) || !(vol > MVT_R(0.0))) {
+        return 0;
+    }
+    return d2 + MVT_LOG(MVT_R(248.05021344239853) * det) < MVT_R(2.0) * MVT_LOG(vol); /* (2 pi)^3 */
+}
+
 /* The test above for a birth at x (covariance cov, colour obs) and record r at now_us: 0 when out of
  * reach (or singular), else 1 and in *score the d^2 plus the colour's -2 ln LR (may be < 0). */
 static int record_test(const mvt_tracker_t *self, const mvt_lost_t *r, const mvt_real x[3], const mvt_real cov[9],
@@ -114,7 +138,7 @@ static int record_test(const mvt_tracker_t *self, const mvt_lost_t *r, const mvt
     P[4] += v * v * dt * dt;
     P[8] += MVT_TRK_HEAD_SD_M * MVT_TRK_HEAD_SD_M;
     const mvt_real d2 = mvt_trk_mahalanobis3(r->x, P, x, cov);
-    if (!(d2 >= MVT_R(0.0)) || d2 > MVT_TRK_GATE3) {
+    if (!(d2 >= MVT_R(0.0)) || d2 > MVT_TRK_GATE3 || !likelier_than_new(self, P, cov, d2)) {
         return 0;
     }
     /* the colour ranks the records in reach (-2 ln LR of the birth's detections against the record's
@@ -158,7 +182,7 @@ void mvt_trk_release_contradicted(mvt_tracker_t *self, const mvt_real x[3], cons
             continue; /* tentative, placed this frame, or not contradicted */
         }
         mvt_lost_t r;
-        record_of(tr, now_us, &r);
+        record_of(tr, tr->last_update_us, now_us, &r);
         mvt_real score;
         if (record_test(self, &r, x, cov, obs, now_us, &score) && (best < 0 || score < best_score)) {
             best_score = score;
