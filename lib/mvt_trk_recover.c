@@ -55,12 +55,12 @@ static mvt_lost_t *free_record(mvt_tracker_t *self, int64_t now_us)
     return best;
 }
 
-/* What mvt_trk_lose keeps of a track: its person's whereabouts are unknown since lost_us. */
-static void record_of(const mvt_track_t *tr, int64_t lost_us, int64_t until_us, mvt_lost_t *r)
+/* What mvt_trk_lose would keep of a track, without keeping it. */
+static void record_of(const mvt_track_t *tr, int64_t until_us, mvt_lost_t *r)
 {
     memset(r, 0, sizeof(*r));
     r->id = tr->id;
-    r->lost_us = lost_us;
+    r->lost_us = tr->last_update_us; /* the person's whereabouts are unknown since */
     r->until_us = until_us;
     for (int i = 0; i < 2; i++) {
         r->x[i] = tr->s.x[i];
@@ -79,7 +79,7 @@ void mvt_trk_lose(mvt_tracker_t *self, const mvt_track_t *tr, int64_t now_us)
     if (!(keep_s > MVT_R(0.0)) || tr->id == 0) {
         return;
     }
-    record_of(tr, tr->last_update_us, now_us + (int64_t)(keep_s * MVT_R(1e6)), free_record(self, now_us));
+    record_of(tr, now_us + (int64_t)(keep_s * MVT_R(1e6)), free_record(self, now_us));
 }
 
 void mvt_trk_give_back(mvt_tracker_t *self, mvt_track_t *tr, int64_t now_us)
@@ -182,7 +182,7 @@ void mvt_trk_release_contradicted(mvt_tracker_t *self, const mvt_real x[3], cons
             continue; /* tentative, placed this frame, or not contradicted */
         }
         mvt_lost_t r;
-        record_of(tr, tr->last_update_us, now_us, &r);
+        record_of(tr, now_us, &r);
         mvt_real score;
         if (record_test(self, &r, x, cov, obs, now_us, &score) && (best < 0 || score < best_score)) {
             best_score = score;
