@@ -9,7 +9,8 @@
  * tracks' blobs, once neither seen nor needed by their boxes for occluded_max_s), when its position
  * standard deviation exceeds max_pos_std_m on any axis, when it leaves the volume (plus margin),
  * or when its covariance cannot be repaired. A track unseen for exit_coast_s near the volume's
- * side walls is deleted sooner (people leave through the sides). Of two tracks closer than
+ * side walls is deleted sooner (people leave through the sides; its identity is kept for recovery
+ * all the same, since people also walk along walls). Of two tracks closer than
  * dup_dist_m in 3D (one person, two tracks), the one the cameras did not place is deleted, else
  * the younger (delete_duplicates). Identities of deleted
  * tracks are never given to another person; a confirmed track deleted while its person may still
@@ -162,9 +163,10 @@ void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us)
             if (tr->status == MVT_TRACK_TENTATIVE) {
                 mvt_trk_give_back(self, tr, now_us);
             } else if (reason == &self->counters.deleted_unseen || reason == &self->counters.deleted_occluded ||
-                       reason == &self->counters.deleted_contradicted) {
-                mvt_trk_lose(self, tr, now_us); /* the person may still be here; one that left, or
-                                                    whose place is unknown, is not kept */
+                       reason == &self->counters.deleted_contradicted || reason == &self->counters.deleted_exit) {
+                mvt_trk_lose(self, tr, now_us); /* the person may still be here (one unseen by a wall
+                                                    may walk along it); one whose place is unknown is
+                                                    not kept */
             }
             tr->id = 0;
             self->counters.deletions++;

@@ -6,10 +6,12 @@
  * Why. A track is deleted on evidence that can be wrong for a moment: no camera placed it for
  * coast_max_s (a segmentation that lost a person standing still), it was hidden for
  * occluded_max_s with no blob needing it, or views showed its place empty for contra_max_s (its
- * estimate drifted off a hidden person). The person is then born again a few frames later under a new identity: an identity
- * switch that no association can prevent, because the old track no longer exists. Tracks that
- * left (through a side wall, out of the volume) and tracks too uncertain to have a place are not
- * kept: their person is gone or nowhere in particular. A confirmed duplicate is kept: it is the
+ * estimate drifted off a hidden person), or it was unseen for exit_coast_s near a side wall (a
+ * person walking along a wall, not out through it: three of the identity switches of the crowd
+ * runs, docs/tracking.md). The person is then born again a few frames later under a new identity:
+ * an identity switch that no association can prevent, because the old track no longer exists.
+ * Tracks out of the volume and tracks too uncertain to have a place are not kept: their person is
+ * gone or nowhere in particular. A confirmed duplicate is kept: it is the
  * track that drifted onto another's person (mvt_trk_delete.c), and its own may be hidden nearby.
  *
  * The test. A record keeps the deleted track's horizontal position x_l as the motion models

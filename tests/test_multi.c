@@ -736,6 +736,34 @@ static void test_mvt_tracker_step_person_lost_and_back_keeps_identity(void **sta
     assert_true(lost_and_born(near_same, 5.6, 2.0f, 3.0f, &was) > 0 && g_new > was);
 }
 
+/* A person walks along a side wall, 0.3 m from it, and the detector loses them for 0.6 s: the
+ * track, unseen for exit_coast_s near the wall, is deleted as leaving, and the person is born again
+ * where they walked on. They keep their identity (before, exit deletions left no record: a new
+ * identity, checked with the exit reason taken out of the kept ones). */
+static void test_mvt_tracker_step_walker_along_wall_keeps_identity(void **state)
+{
+    (void)state;
+    init();
+    test_rng_t rng = {31};
+    int64_t t = 1000000;
+    int32_t first = 0;
+    for (int f = 0; f < 150; f++, t += 40000) {
+        const double x = 1.0 + 0.6 * f * 0.04;
+        const mvt_real X[1][3] = {{(mvt_real)x, 4.7f, 1.72f}};
+        const int lost = f >= 60 && f < 75;
+        frame_of(X, lost ? 0 : 1, t, &rng, 2.0, 0);
+        assert_int_equal(mvt_tracker_step(&g_tracker, &g_frame, &g_out), MVT_OK);
+        if (f == 55) {
+            first = id_near(X[0]);
+            assert_true(first > 0);
+        }
+    }
+    const mvt_real end[3] = {(mvt_real)(1.0 + 0.6 * 149 * 0.04), 4.7f, 1.72f};
+    assert_int_equal(g_tracker.counters.deleted_exit, 1);
+    assert_int_equal(id_near(end), first);
+    assert_int_equal(g_tracker.counters.identities_recovered, 1);
+}
+
 /* A short person walks into the middle of a group of three tall ones, stands there 3 s (hidden in
  * their blobs in most views: never two views' top point), and walks out. Returns the number of
  * distinct identities the short person had while confirmed; fills the closest horizontal distance
@@ -1071,6 +1099,7 @@ int main(void)
         cmocka_unit_test(test_mvt_tracker_step_more_people_than_capacity_births_refused_counted),
         cmocka_unit_test(test_mvt_tracker_step_person_returns_new_identity),
         cmocka_unit_test(test_mvt_tracker_step_person_lost_and_back_keeps_identity),
+        cmocka_unit_test(test_mvt_tracker_step_walker_along_wall_keeps_identity),
         cmocka_unit_test(test_mvt_tracker_select_under_capacity_keeps_all_in_order),
         cmocka_unit_test(test_mvt_tracker_step_hidden_in_group_keeps_identity),
         cmocka_unit_test(test_mvt_tracker_step_queue_hidden_kept_while_box_needs_them),
