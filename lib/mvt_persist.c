@@ -163,10 +163,9 @@ static int tracker_state_ok(const mvt_tracker_config_t *c, const mvt_tracker_per
         const int64_t now = p->last_utime_us;
         if (tr->id < 0 || !p->have_time || !status_ok(tr->status) || !estimate_ok(c, &tr->s, now) ||
             !time_ok(tr->last_update_us, now) || !time_ok(tr->last_explained_us, now) ||
-            !time_ok(tr->last_consistent_us, now) ||
-            !time_ok(tr->last_needed_us, now) || tr->misses < 0 || !bank_ok(c, tr) ||
-            !lost_ok(c, &tr->held, now) || !isfinite(tr->exist_llr) || !isfinite(tr->need_llr) || !seen_height_ok(c, tr) ||
-            !mvt_trk_app_ok(&tr->app) ||
+            !time_ok(tr->last_consistent_us, now) || !time_ok(tr->last_needed_us, now) || tr->misses < 0 ||
+            !bank_ok(c, tr) || !lost_ok(c, &tr->held, now) || !isfinite(tr->exist_llr) ||
+            !isfinite(tr->need_llr) || !seen_height_ok(c, tr) || !mvt_trk_app_ok(&tr->app) ||
             (tr->held.id != 0 && (tr->held.id != tr->id || tr->status != MVT_TRACK_TENTATIVE))) {
             return 0;
         }

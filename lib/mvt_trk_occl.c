@@ -168,8 +168,8 @@ static int silhouette(const mvt_tracker_t *self, int k, const mvt_real x[3], con
     return 1;
 }
 
-/* -2 ln of a Gaussian edge likelihood ratio: box edge e predicted at a (with the track's person) or
- * b (without), standard deviation s. */
+/* ln of the likelihood ratio of box edge e, Gaussian about a (with the track's person) or about b
+ * (without), variance s2. */
 static mvt_real edge_llr(mvt_real e, mvt_real a, mvt_real b, mvt_real s2)
 {
     return MVT_R(0.5) * ((e - b) * (e - b) - (e - a) * (e - a)) / s2;
