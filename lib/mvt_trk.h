@@ -88,8 +88,10 @@ mvt_real mvt_trk_app_obs_cost(const mvt_app_t *app, const mvt_app_obs_t *obs);
 /* A valid appearance (a checkpoint's): finite, m in the disc, var and n in range. */
 int mvt_trk_app_ok(const mvt_app_t *app);
 
-/* Mahalanobis distance squared of b from a, covariance Pa + Pb (3x3 each); < 0 if singular. */
-mvt_real mvt_trk_mahalanobis3(const mvt_real a[3], const mvt_real Pa[9], const mvt_real b[3], const mvt_real Pb[9]);
+/* Mahalanobis distance squared of b from a, covariance S = Pa + Pb (3x3 each); < 0 if singular.
+ * det (may be NULL) receives |S|. */
+mvt_real mvt_trk_mahalanobis3(const mvt_real a[3], const mvt_real Pa[9], const mvt_real b[3], const mvt_real Pb[9],
+                              mvt_real *det);
 
 /* Identity recovery (mvt_trk_recover.c). A confirmed track deleted while its person may still be
  * in the room (unseen, hidden too long, contradicted) leaves its identity, position and covariance
@@ -135,6 +137,11 @@ typedef enum mvt_trk_evidence {
 int mvt_trk_box_ok(const mvt_real b[4]);
 /* Image point uv lies in usable box b widened by slack_u, slack_v pixels. */
 int mvt_trk_in_box(const mvt_real b[4], const mvt_real uv[2], mvt_real slack_u, mvt_real slack_v);
+
+/* The predicted heads of the seen (confirmed or coasting) tracks in camera k (the frame's
+ * predictions, pred), raw pixels, with three standard deviations of the prediction and the pixel
+ * noise: heads[i] = [u, v, margin u, margin v] of track who[i]. Returns their number. O(T). */
+int mvt_trk_seen_heads(const mvt_tracker_t *self, int k, mvt_real heads[][4], int16_t who[]);
 
 /* The view's evidence on a head at x (call only for a view with boxes). O(D). */
 mvt_trk_evidence_t mvt_trk_view_evidence(const mvt_tracker_t *self, const mvt_view_t *view, int k,

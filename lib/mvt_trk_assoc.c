@@ -140,35 +140,8 @@ static int blob_holds_two(const mvt_view_t *view, int d, const mvt_real heads[][
     return n >= 2;
 }
 
-/* The predicted heads of the seen (confirmed or coasting) tracks in camera k, raw pixels, with three
- * standard deviations of the prediction and the pixel noise: [u, v, margin u, margin v]. */
-static int seen_heads(const mvt_tracker_t *self, int k, const int live[], int n_live, mvt_real heads[][4],
-                      int16_t who[])
-{
-    const mvt_camera_t *cam = &self->cams[k];
-    int n = 0;
-    for (int i = 0; i < n_live; i++) {
-        const int t = live[i];
-        const mvt_track_t *tr = &self->tracks[t];
-        if (!self->pred_ok[t] || tr->status == MVT_TRACK_TENTATIVE) {
-            continue;
-        }
-        const mvt_pkf_pred_t *p = &self->pred[t];
-        mvt_real *h = heads[n];
-        h[0] = p->h[0];
-        h[1] = p->h[1];
-        if (p->lin != MVT_PKF_JACOBIAN && mvt_cam_project(cam, tr->s.x, h, NULL) != MVT_OK) {
-            continue;
-        }
-        h[2] = MVT_R(3.0) * MVT_SQRT(p->hph[0] + cam->sigma_px * cam->sigma_px);
-        h[3] = MVT_R(3.0) * MVT_SQRT(p->hph[2] + cam->sigma_px * cam->sigma_px);
-        who[n++] = (int16_t)t;
-    }
-    return n;
-}
-
-/* The predicted heads of the seen tracks in camera k (seen_heads: heads, who), returned as their
- * count for the merged blobs' tests after the assignment too. */
+/* The predicted heads of the seen tracks in camera k (mvt_trk_seen_heads: heads, who), returned as
+ * their count for the merged blobs' tests after the assignment too. */
 static int hypothesise(mvt_tracker_t *self, const mvt_view_t *view, int k, const int live[], int n_live,
                        mvt_real heads[][4], int16_t who[])
 {
@@ -226,7 +199,7 @@ static int hypothesise(mvt_tracker_t *self, const mvt_view_t *view, int k, const
     for (int i = 0; i < n_live; i++) { /* the colour's shift (app_cost), once per track and camera */
         self->app_shift[live[i]] = mvt_trk_app_cost_min(&self->tracks[live[i]].app);
     }
-    const int n_heads = seen_heads(self, k, live, n_live, heads, who);
+    const int n_heads = mvt_trk_seen_heads(self, k, heads, who);
     uint8_t two_checked[MVT_MAX_DETECTIONS]; /* blob_holds_two asked of detection d yet (lazily: only
                                                  gated detections' colour is used) */
     memset(two_checked, 0, sizeof(two_checked));

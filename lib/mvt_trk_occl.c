@@ -54,6 +54,29 @@ int mvt_trk_in_box(const mvt_real b[4], const mvt_real uv[2], mvt_real slack_u, 
            uv[1] <= b[3] + slack_v;
 }
 
+int mvt_trk_seen_heads(const mvt_tracker_t *self, int k, mvt_real heads[][4], int16_t who[])
+{
+    const mvt_camera_t *cam = &self->cams[k];
+    int n = 0;
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        const mvt_track_t *tr = &self->tracks[t];
+        if (tr->id == 0 || !self->pred_ok[t] || tr->status == MVT_TRACK_TENTATIVE) {
+            continue;
+        }
+        const mvt_pkf_pred_t *p = &self->pred[t];
+        mvt_real *h = heads[n];
+        h[0] = p->h[0];
+        h[1] = p->h[1];
+        if (p->lin != MVT_PKF_JACOBIAN && mvt_cam_project(cam, tr->s.x, h, NULL) != MVT_OK) {
+            continue;
+        }
+        h[2] = MVT_R(3.0) * MVT_SQRT(p->hph[0] + cam->sigma_px * cam->sigma_px);
+        h[3] = MVT_R(3.0) * MVT_SQRT(p->hph[2] + cam->sigma_px * cam->sigma_px);
+        who[n++] = (int16_t)t;
+    }
+    return n;
+}
+
 mvt_trk_evidence_t mvt_trk_view_evidence(const mvt_tracker_t *self, const mvt_view_t *view, int k,
                                          const mvt_real x[3], mvt_real slack_px)
 {
@@ -175,9 +198,28 @@ static mvt_real edge_llr(mvt_real e, mvt_real a, mvt_real b, mvt_real s2)
     return MVT_R(0.5) * ((e - b) * (e - b) - (e - a) * (e - a)) / s2;
 }
 
+/* The seen tracks of camera k that a hidden track's blob may hold, once per camera: their predicted
+ * heads (mvt_trk_seen_heads) and silhouettes (ok[i] = 0 where the feet do not project). */
+typedef struct occl_others {
+    int n; /* -1: not gathered yet */
+    mvt_real heads[MVT_MAX_TARGETS][4];
+    int16_t who[MVT_MAX_TARGETS];
+    mvt_real sil[MVT_MAX_TARGETS][4];
+    uint8_t ok[MVT_MAX_TARGETS];
+} occl_others_t;
+
+static void gather_others(const mvt_tracker_t *self, int k, occl_others_t *o)
+{
+    o->n = mvt_trk_seen_heads(self, k, o->heads, o->who);
+    for (int i = 0; i < o->n; i++) {
+        const int u = o->who[i];
+        o->ok[i] = (uint8_t)silhouette(self, k, self->tracks[u].s.x, o->heads[i], self->pred[u].depth_m, o->sil[i]);
+    }
+}
+
 /* Does blob d's box need hidden track t? The box is the union of the silhouettes of the people in
  * the blob. Its left, right and bottom edges are predicted from the other seen tracks whose heads
- * the box holds, with and without t's silhouette (sil_t), each edge with the detection's noise,
+ * the box holds (o), with and without t's silhouette (sil_t), each edge with the detection's noise,
  * OCCL_BODY_SD_M at the depth and the prediction's spread. Returns the log-likelihood ratio of the
  * three edges, t in the blob against t absent: > 0 when the box reaches out where only t's body
  * would put it (a person hidden beside or in front of the one whose top the blob reports), < 0 when
@@ -185,7 +227,7 @@ static mvt_real edge_llr(mvt_real e, mvt_real a, mvt_real b, mvt_real s2)
  * when the others fill t's silhouette either way (a person right behind another: no information).
  * Edges at the picture's border, where the box is cut, say nothing. */
 static mvt_real extent_llr(const mvt_tracker_t *self, const mvt_view_t *view, int k, int t, int d,
-                           const mvt_pkf_pred_t *p)
+                           const mvt_pkf_pred_t *p, const occl_others_t *o)
 {
     const mvt_camera_t *cam = &self->cams[k];
     const mvt_real *b = view->det[d].box;
@@ -194,19 +236,9 @@ static mvt_real extent_llr(const mvt_tracker_t *self, const mvt_view_t *view, in
         return MVT_R(0.0);
     }
     int n = 0;
-    for (int u = 0; u < MVT_MAX_TARGETS; u++) {
-        const mvt_track_t *tu = &self->tracks[u];
-        if (u == t || tu->id == 0 || tu->status == MVT_TRACK_TENTATIVE || !self->pred_ok[u]) {
-            continue;
-        }
-        const mvt_pkf_pred_t *q = &self->pred[u];
-        mvt_real h[2], sil[4];
-        if (mvt_cam_project(cam, tu->s.x, h, NULL) != MVT_OK) {
-            continue;
-        }
-        const mvt_real mu = MVT_R(3.0) * MVT_SQRT(q->hph[0] + cam->sigma_px * cam->sigma_px);
-        const mvt_real mv = MVT_R(3.0) * MVT_SQRT(q->hph[2] + cam->sigma_px * cam->sigma_px);
-        if (!mvt_trk_in_box(b, h, mu, mv) || !silhouette(self, k, tu->s.x, h, q->depth_m, sil)) {
+    for (int i = 0; i < o->n; i++) {
+        const mvt_real *h = o->heads[i], *sil = o->sil[i];
+        if (o->who[i] == t || !o->ok[i] || !mvt_trk_in_box(b, h, h[2], h[3])) {
             continue;
         }
         if (n++ == 0) {
@@ -245,6 +277,8 @@ void mvt_trk_occlusion(mvt_tracker_t *self, const mvt_view_t *view, int k, const
     if (!self->ev_boxes[k]) {
         return; /* a view without boxes can neither hide nor contradict */
     }
+    occl_others_t others;
+    others.n = -1;
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         mvt_track_t *tr = &self->tracks[t];
         if (tr->id == 0 || assign[t] >= 0 || !self->pred_ok[t]) {
@@ -326,7 +360,10 @@ void mvt_trk_occlusion(mvt_tracker_t *self, const mvt_view_t *view, int k, const
         if (err == MVT_OK) {
             tr->cameras_occluded |= 1u << k;
             self->counters.occluded_updates++;
-            tr->need_llr += extent_llr(self, view, k, t, best, p);
+            if (others.n < 0) {
+                gather_others(self, k, &others);
+            }
+            tr->need_llr += extent_llr(self, view, k, t, best, p, &others);
         } else if (err != MVT_ERR_NUMERIC) {
             self->counters.numeric_faults++;
         }

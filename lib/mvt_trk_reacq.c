@@ -25,7 +25,8 @@
 #include "mvt_trk.h"
 
 
-mvt_real mvt_trk_mahalanobis3(const mvt_real a[3], const mvt_real Pa[9], const mvt_real b[3], const mvt_real Pb[9])
+mvt_real mvt_trk_mahalanobis3(const mvt_real a[3], const mvt_real Pa[9], const mvt_real b[3], const mvt_real Pb[9],
+                              mvt_real *det)
 {
     mvt_real S[9], Si[9];
     for (int i = 0; i < 9; i++) {
@@ -33,6 +34,10 @@ mvt_real mvt_trk_mahalanobis3(const mvt_real a[3], const mvt_real Pa[9], const m
     }
     if (mvt_la_inv3(S, Si) != MVT_OK) {
         return MVT_R(-1.0);
+    }
+    if (det != NULL) {
+        *det = S[0] * (S[4] * S[8] - S[5] * S[7]) - S[1] * (S[3] * S[8] - S[5] * S[6]) +
+               S[2] * (S[3] * S[7] - S[4] * S[6]);
     }
     const mvt_real d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
     mvt_real q = MVT_R(0.0);
@@ -144,7 +149,7 @@ void mvt_trk_reacquire(mvt_tracker_t *self, const mvt_frame_t *frame, const int 
             if (tr->id == 0 || lost[t]) {
                 continue;
             }
-            const mvt_real d2 = mvt_trk_mahalanobis3(self->rq_tx[t], self->rq_tP[t], self->rq_x[i], self->rq_cov[i]);
+            const mvt_real d2 = mvt_trk_mahalanobis3(self->rq_tx[t], self->rq_tP[t], self->rq_x[i], self->rq_cov[i], NULL);
             taken = d2 >= MVT_R(0.0) && d2 <= MVT_TRK_GATE3;
         }
         if (!taken) {
@@ -162,7 +167,7 @@ void mvt_trk_reacquire(mvt_tracker_t *self, const mvt_frame_t *frame, const int 
         mvt_real *row = &self->cl_cost[r * ncol];
         for (int j = 0; j < n_cols; j++) {
             const int i = cols[j];
-            const mvt_real d2 = mvt_trk_mahalanobis3(x, P, self->rq_x[i], self->rq_cov[i]);
+            const mvt_real d2 = mvt_trk_mahalanobis3(x, P, self->rq_x[i], self->rq_cov[i], NULL);
             row[j] = d2 >= MVT_R(0.0) && d2 <= MVT_TRK_GATE3 ? d2 : MVT_R(-1.0);
         }
         for (int j = 0; j < n_rows; j++) {

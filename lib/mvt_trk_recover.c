@@ -104,21 +104,14 @@ void mvt_trk_confirm(mvt_tracker_t *self, mvt_track_t *tr)
     }
 }
 
-/* Is a birth whose place is d2 (Mahalanobis, covariance S = P + cov) from a record likelier that
+/* Is a birth whose place is d2 (Mahalanobis, covariance S, |S| = det) from a record likelier that
  * record's person than a person new to the room, whose head may be anywhere in the tracked volume
  * (density 1 / V)? N(d2; S) > 1 / V, i.e. d2 + ln((2 pi)^3 |S|) < 2 ln V. The gate alone let a
  * record whose person nobody had placed for seconds reach across the room: its walking reach grows
  * init_vel_std_ms a second, so after 3 s a person entering by a door 2.4 m away was "in reach" and
  * took the identity (docs/tracking.md, "A new person, or a lost one?"). */
-static int likelier_than_new(const mvt_tracker_t *self, const mvt_real P[9], const mvt_real cov[9], mvt_real d2)
+static int likelier_than_new(const mvt_tracker_config_t *c, mvt_real d2, mvt_real det)
 {
-    const mvt_tracker_config_t *c = &self->cfg;
-    mvt_real S[9];
-    for (int i = 0; i < 9; i++) {
-        S[i] = P[i] + cov[i];
-    }
-    const mvt_real det = S[0] * (S[4] * S[8] - S[5] * S[7]) - S[1] * (S[3] * S[8] - S[5] * S[6]) +
-                         S[2] * (S[3] * S[7] - S[4] * S[6]);
     const mvt_real vol = (c->volume_max[0] - c->volume_min[0]) * (c->volume_max[1] - c->volume_min[1]) *
                          (c->volume_max[2] - c->volume_min[2]);
     if (!(det > MVT_R(0.0)) || !(vol > MVT_R(0.0))) {
@@ -139,8 +132,9 @@ static int record_test(const mvt_tracker_t *self, const mvt_lost_t *r, const mvt
     P[0] += v * v * dt * dt; /* + W */
     P[4] += v * v * dt * dt;
     P[8] += MVT_TRK_HEAD_SD_M * MVT_TRK_HEAD_SD_M;
-    const mvt_real d2 = mvt_trk_mahalanobis3(r->x, P, x, cov);
-    if (!(d2 >= MVT_R(0.0)) || d2 > MVT_TRK_GATE3 || !likelier_than_new(self, P, cov, d2)) {
+    mvt_real det;
+    const mvt_real d2 = mvt_trk_mahalanobis3(r->x, P, x, cov, &det);
+    if (!(d2 >= MVT_R(0.0)) || d2 > MVT_TRK_GATE3 || !likelier_than_new(&self->cfg, d2, det)) {
         return 0;
     }
     /* the colour ranks the records in reach (-2 ln LR of the birth's detections against the record's
