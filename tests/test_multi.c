@@ -868,12 +868,12 @@ static void test_mvt_tracker_step_hidden_in_group_keeps_identity(void **state)
  * detects the short person; the blob's box, though, reaches out where only their body puts it.
  * Returns the number of identities the short person's confirmed track had while present, and in
  * *gone_after the frames from the vanishing until that track was deleted (-1: never). */
-static int queue_hidden(int vanish, double aside, int *covered, int *gone_after)
+static int queue_hidden(int vanish, int *covered, int *gone_after)
 {
     init();
     test_rng_t rng = {23};
     const double dir[2] = {0.7713, 0.6364}, perp[2] = {-0.6364, 0.7713};
-    const double c[2] = {2.2, 1.85};
+    const double c[2] = {2.2, 1.85}, aside = 0.15;
     mvt_real X[3][3] = {{(mvt_real)(c[0] - 0.42 * dir[0]), (mvt_real)(c[1] - 0.42 * dir[1]), 1.88f},
                         {(mvt_real)(c[0] + aside * perp[0]), (mvt_real)(c[1] + aside * perp[1]), 1.55f},
                         {(mvt_real)(c[0] + 0.42 * dir[0]), (mvt_real)(c[1] + 0.42 * dir[1]), 1.92f}};
@@ -925,13 +925,13 @@ static void test_mvt_tracker_step_queue_hidden_kept_while_box_needs_them(void **
     /* hidden for 22 s, twice occluded_max_s: one identity all along, never deleted as hidden (with
      * the hidden life counted from the last frame seen, as before the boxes' evidence, the track was
      * deleted after 10 s and the person born again: 2 identities, 557 of 900 frames covered) */
-    assert_int_equal(queue_hidden(0, 0.15, &covered, &gone_after), 1);
+    assert_int_equal(queue_hidden(0, &covered, &gone_after), 1);
     assert_true(covered >= 890);
     assert_int_equal(g_tracker.counters.deleted_occluded, 0);
     assert_true(g_tracker.counters.occluded_updates > 1000);
     /* the person vanishes from the middle of the queue: the boxes shrink to the tall two and the
      * track goes within a second (12 frames measured), not after occluded_max_s */
-    assert_int_equal(queue_hidden(1, 0.15, &covered, &gone_after), 1);
+    assert_int_equal(queue_hidden(1, &covered, &gone_after), 1);
     assert_true(gone_after >= 0 && gone_after <= 25);
 }
 
