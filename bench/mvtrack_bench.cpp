@@ -278,35 +278,61 @@ struct EigenSeqFilter {
  * as mvt_imm, the standing model on its position rows, robust with the same p_outlier), one
  * combination at the end. */
 struct EigenImm {
-    int n = 3;
-    EigenSeqFilter m[3];
-    float mu[3];
-    float leave[3];
-    Eigen::Vector3f q[3];
-    bool still[3];
+    enum { N = 4 };
+    int n = N;
+    EigenSeqFilter m[N];
+    float mu[N];
+    float leave[N];
+    Eigen::Vector3f q[N];
+    bool still[N][3];  /* per model and axis: the axis holds (STILL), else constant velocity */
+    bool all_still[N]; /* the standing model: updated on its position rows only */
     float eps = 0.1f, radius = 150.0f; /* p_outlier, outlier_radius_px */
     Vec6 xc;
     Mat6 Pc;
     void combine()
     {
-        xc = mu[0] * m[0].x + mu[1] * m[1].x + mu[2] * m[2].x;
+        xc.setZero();
+        for (int j = 0; j < n; j++) xc += mu[j] * m[j].x;
         Pc.setZero();
         for (int j = 0; j < n; j++) {
             const Vec6 d = m[j].x - xc;
             Pc.noalias() += mu[j] * (m[j].P + d * d.transpose());
         }
     }
+    void predict(int j, float dt)
+    {
+        Eigen::Vector3f qcv = q[j];
+        bool any_cv = false;
+        for (int i = 0; i < 3; i++) {
+            if (!still[j][i]) {
+                any_cv = true;
+                continue;
+            }
+            qcv(i) = 0;
+            m[j].x(3 + i) = 0;
+            m[j].P.row(3 + i).setZero();
+            m[j].P.col(3 + i).setZero();
+        }
+        if (any_cv) m[j].predict_cv(dt, qcv);
+        for (int i = 0; i < 3; i++) {
+            if (still[j][i]) {
+                m[j].P(i, i) += dt * q[j](i);
+                m[j].P(3 + i, 3 + i) = q[j](i);
+            }
+        }
+    }
     void step(float dt, const EigenCam *cams, const Eigen::Vector2f *z, float r)
     {
-        float p[3][3], c[3];
+        float p[N][N], c[N];
         for (int i = 0; i < n; i++) {
             const float stay = std::exp(-leave[i] * dt);
             for (int j = 0; j < n; j++) p[i][j] = i == j ? stay : (1 - stay) / (n - 1);
         }
-        Vec6 x0[3];
-        Mat6 P0[3];
+        Vec6 x0[N];
+        Mat6 P0[N];
         for (int j = 0; j < n; j++) {
-            c[j] = p[0][j] * mu[0] + p[1][j] * mu[1] + p[2][j] * mu[2];
+            c[j] = 0;
+            for (int i = 0; i < n; i++) c[j] += p[i][j] * mu[i];
             x0[j].setZero();
             for (int i = 0; i < n; i++) x0[j] += (p[i][j] * mu[i] / c[j]) * m[i].x;
             P0[j].setZero();
@@ -319,26 +345,20 @@ struct EigenImm {
             m[j].x = x0[j];
             m[j].P = P0[j];
             mu[j] = c[j];
-            if (still[j]) {
-                m[j].x.tail<3>().setZero();
-                m[j].P.topRightCorner<3, 3>().setZero();
-                m[j].P.bottomLeftCorner<3, 3>().setZero();
-                m[j].P.bottomRightCorner<3, 3>() = q[j].asDiagonal();
-                m[j].P.topLeftCorner<3, 3>().diagonal() += dt * q[j];
-            } else {
-                m[j].predict_cv(dt, q[j]);
-            }
+            predict(j, dt);
         }
         /* between cameras only the combined position is read (the next projection), as in mvt_imm */
         for (int k = 0; k < 5; k++) {
-            const Eigen::Vector3f pc = mu[0] * m[0].x.head<3>() + mu[1] * m[1].x.head<3>() + mu[2] * m[2].x.head<3>();
+            Eigen::Vector3f pc = Eigen::Vector3f::Zero();
+            for (int j = 0; j < n; j++) pc += mu[j] * m[j].x.head<3>();
             Eigen::Matrix<float, 2, 3> J;
             const Eigen::Vector2f h = cams[k].project(pc, J);
             const float clutter = eps / (3.14159265f * radius * radius);
             float sum = 0;
             for (int j = 0; j < n; j++) {
                 const Eigen::Vector2f y = z[k] - h - J * (m[j].x.head<3>() - pc);
-                sum += (mu[j] *= still[j] ? m[j].update_ldl<3>(J, y, r, eps, clutter) : m[j].update_ldl<6>(J, y, r, eps, clutter));
+                sum += (mu[j] *= all_still[j] ? m[j].update_ldl<3>(J, y, r, eps, clutter)
+                                              : m[j].update_ldl<6>(J, y, r, eps, clutter));
             }
             for (int j = 0; j < n; j++) mu[j] /= sum;
         }
@@ -537,20 +557,22 @@ int main(int argc, char **argv)
         measure("filter_update_5cam_imm", 100000, runs, imm_step);
         measure_ratio("filter_update_5cam_imm.vs_single", 2000, 401, single_step, imm_step);
         EigenImm ei;
-        for (int j = 0; j < 3; j++) {
+        ei.n = icfg.n < EigenImm::N ? icfg.n : (int)EigenImm::N;
+        for (int j = 0; j < ei.n; j++) {
             ei.m[j] = es;
             ei.m[j].x << truth[0], truth[1], truth[2], 0, 0, 0;
             ei.m[j].P = Mat6::Identity() * 1e-3f;
             ei.m[j].P.bottomRightCorner<3, 3>() = Eigen::Matrix3f::Identity() * 0.25f;
             ei.leave[j] = icfg.model[j].leave_hz;
             ei.q[j] << icfg.model[j].q[0], icfg.model[j].q[1], icfg.model[j].q[2];
-            ei.still[j] = icfg.model[j].kind == MVT_MOTION_STILL;
+            for (int a = 0; a < 3; a++) ei.still[j][a] = icfg.model[j].kind[a] == MVT_MOTION_STILL;
+            ei.all_still[j] = mvt_imm_model_is(&icfg.model[j], MVT_MOTION_STILL);
             ei.eps = (float)icfg.p_outlier;
             ei.radius = (float)icfg.outlier_radius_px;
         }
         mvt_real mu0[MVT_IMM_MODELS];
         mvt_imm_stationary(&icfg, mu0);
-        for (int j = 0; j < 3; j++) ei.mu[j] = (float)mu0[j];
+        for (int j = 0; j < ei.n; j++) ei.mu[j] = (float)mu0[j];
         auto peer_imm_step = [&](int i) {
             ei.step(0.04f, ec.data(), z, 9.0f);
             if ((i & 1023) == 0) g_sink += ei.xc(0);

@@ -75,12 +75,14 @@ static void usage(FILE *f)
             "                      projected ellipsoid (Eq. 22-26)\n"
             "  --gate-chi2 X       chi-square threshold, 2 dof (default 13.8)\n"
             "  --motion imm|cv     pkf modes' motion model: imm (default), an interacting multiple\n"
-            "                      model of standing, walking and manoeuvring people that needs no\n"
-            "                      tuning; cv: one constant-velocity model with --q\n"
-            "  --motion-models M   imm: the bank, KIND:QXY:QZ:LEAVE;... (KIND still: q is the\n"
-            "                      diffusion m^2/s; cv: q is the white acceleration m^2/s^3;\n"
-            "                      LEAVE: rate 1/s); default\n"
-            "                      still:2.5e-5:2.5e-5:0.2;cv:0.3:0.02:0.3;cv:3:0.1:1.5\n"
+            "                      model of standing, walking, turning and sitting people that\n"
+            "                      needs no tuning; cv: one constant-velocity model with --q\n"
+            "  --motion-models M   imm: the bank, KIND:QXY:QZ:LEAVE;... KIND is still or cv for\n"
+            "                      every axis, or XY/Z (cv/still: walks and holds its height);\n"
+            "                      still: q is the diffusion m^2/s; cv: q is the white\n"
+            "                      acceleration m^2/s^3; LEAVE: rate 1/s. Default\n"
+            "                      still:2.5e-5:2.5e-5:0.2;cv/still:0.3:4e-4:0.3;\n"
+            "                      cv:3:0.1:1.5;still/cv:2.5e-5:1:1.3\n"
             "  --q QX,QY,QZ        cv: white-acceleration density m^2/s^3 per axis (default\n"
             "                      0.5,0.5,0.05; tools/mvtrack learn-q estimates it); implies cv\n"
             "  --sigma-px X        pixel noise for cameras without sigma_px in the rig (default 2)\n"
@@ -110,7 +112,7 @@ static void usage(FILE *f)
             "or rig; 1 when LCM cannot be opened.\n");
 }
 
-/* "still:1e-4:1e-4:0.2;cv:0.05:0.02:0.2;cv:3:0.1:1.5" -> an IMM bank. */
+/* "still:1e-4:1e-4:0.2;cv/still:0.3:4e-4:0.3;still/cv:2.5e-5:1:1.3" -> an IMM bank. */
 static int parse_models(const char *s, mvt_imm_config_t *c)
 {
     mvt_imm_config_t out;
@@ -123,15 +125,33 @@ static int parse_models(const char *s, mvt_imm_config_t *c)
             return -1;
         }
         mvt_imm_model_t *m = &out.model[out.n];
-        if (strncmp(p, "still:", 6) == 0) {
-            m->kind = MVT_MOTION_STILL;
-            p += 6;
-        } else if (strncmp(p, "cv:", 3) == 0) {
-            m->kind = MVT_MOTION_CV;
-            p += 3;
-        } else {
+        /* KIND: one kind for every axis, or the horizontal and the vertical kind, XY/Z */
+        mvt_motion_kind_t k[2];
+        for (int part = 0; part < 2; part++) {
+            if (strncmp(p, "still", 5) == 0) {
+                k[part] = MVT_MOTION_STILL;
+                p += 5;
+            } else if (strncmp(p, "cv", 2) == 0) {
+                k[part] = MVT_MOTION_CV;
+                p += 2;
+            } else {
+                return -1;
+            }
+            if (part == 0 && *p == '/') {
+                p++;
+                continue;
+            }
+            if (part == 0) {
+                k[1] = k[0];
+            }
+            break;
+        }
+        if (*p != ':') {
             return -1;
         }
+        p++;
+        m->kind[0] = m->kind[1] = k[0];
+        m->kind[2] = k[1];
         double v[3];
         for (int i = 0; i < 3; i++) {
             char *end = NULL;
@@ -380,7 +400,7 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
         mvt_imm_config_single(&cfg.motion, q);
     } else if (models != NULL && parse_models(models, &cfg.motion) != 0) {
         fprintf(stderr, "mvtrackd: --motion-models needs up to %d models KIND:QXY:QZ:LEAVE separated by ';' "
-                        "(KIND still or cv, q > 0, leave rate >= 0 per second), got '%s'\n", MVT_IMM_MODELS, models);
+                        "(KIND still, cv or XY/Z such as cv/still, q > 0, leave rate >= 0 per second), got '%s'\n", MVT_IMM_MODELS, models);
         return 2;
     }
     d->mode_name = mode;

@@ -5,19 +5,25 @@
 
 #include "mvt_linalg.h"
 
+#define ALL3(k) {(k), (k), (k)}
+#define WALKS {MVT_MOTION_CV, MVT_MOTION_CV, MVT_MOTION_STILL}
+#define RISES {MVT_MOTION_STILL, MVT_MOTION_STILL, MVT_MOTION_CV}
+
 void mvt_imm_config_default(mvt_imm_config_t *c)
 {
     memset(c, 0, sizeof(*c));
-    const mvt_imm_model_t bank[3] = {
-        {MVT_MOTION_STILL, {MVT_R(2.5e-5), MVT_R(2.5e-5), MVT_R(2.5e-5)}, MVT_R(0.2)},
-        {MVT_MOTION_CV, {MVT_R(0.3), MVT_R(0.3), MVT_R(0.02)}, MVT_R(0.3)},
-        {MVT_MOTION_CV, {MVT_R(3.0), MVT_R(3.0), MVT_R(0.1)}, MVT_R(1.5)},
+    enum { BANK = 4 };
+    const mvt_imm_model_t bank[BANK] = {
+        {ALL3(MVT_MOTION_STILL), {MVT_R(2.5e-5), MVT_R(2.5e-5), MVT_R(2.5e-5)}, MVT_R(0.2)},
+        {WALKS, {MVT_R(0.3), MVT_R(0.3), MVT_R(4e-4)}, MVT_R(0.3)},
+        {ALL3(MVT_MOTION_CV), {MVT_R(3.0), MVT_R(3.0), MVT_R(0.1)}, MVT_R(1.5)},
+        {RISES, {MVT_R(2.5e-5), MVT_R(2.5e-5), MVT_R(1.0)}, MVT_R(1.3)},
     };
-    c->n = MVT_IMM_MODELS < 3 ? MVT_IMM_MODELS : 3;
+    c->n = MVT_IMM_MODELS < BANK ? MVT_IMM_MODELS : BANK;
     c->p_outlier = MVT_R(0.1);
     c->outlier_radius_px = MVT_R(150.0);
     for (int j = 0; j < c->n; j++) {
-        c->model[j] = bank[3 - c->n + j]; /* a smaller capacity keeps the moving models */
+        c->model[j] = bank[j];
     }
 }
 
@@ -26,10 +32,15 @@ void mvt_imm_config_single(mvt_imm_config_t *c, const mvt_real q[3])
     memset(c, 0, sizeof(*c));
     c->n = 1;
     c->outlier_radius_px = MVT_R(150.0); /* p_outlier 0: the single filter is the plain PKF */
-    c->model[0].kind = MVT_MOTION_CV;
     for (int i = 0; i < 3; i++) {
+        c->model[0].kind[i] = MVT_MOTION_CV;
         c->model[0].q[i] = q[i];
     }
+}
+
+int mvt_imm_model_is(const mvt_imm_model_t *m, mvt_motion_kind_t k)
+{
+    return m->kind[0] == k && m->kind[1] == k && m->kind[2] == k;
 }
 
 mvt_err_t mvt_imm_config_check(const mvt_imm_config_t *c)
@@ -39,11 +50,9 @@ mvt_err_t mvt_imm_config_check(const mvt_imm_config_t *c)
     }
     for (int j = 0; j < c->n; j++) {
         const mvt_imm_model_t *m = &c->model[j];
-        if (m->kind != MVT_MOTION_CV && m->kind != MVT_MOTION_STILL) {
-            return MVT_ERR_INVALID;
-        }
         for (int i = 0; i < 3; i++) {
-            if (!(m->q[i] > MVT_R(0.0)) || !isfinite(m->q[i])) {
+            if ((m->kind[i] != MVT_MOTION_CV && m->kind[i] != MVT_MOTION_STILL) || !(m->q[i] > MVT_R(0.0)) ||
+                !isfinite(m->q[i])) {
                 return MVT_ERR_INVALID;
             }
         }
@@ -85,20 +94,39 @@ void mvt_imm_init(mvt_imm_t *imm, const mvt_imm_config_t *c, const mvt_cv_state_
     mvt_imm_stationary(c, imm->mu);
 }
 
-/* A standing head: x_p' = x_p + w_p, x_v' = w_v, w_p ~ N(0, q dt), w_v ~ N(0, q / 1 s). */
-static void predict_still(mvt_cv_state_t *s, mvt_real dt, const mvt_real q[3])
+/* One model's prediction over dt. Its CV axes: mvt_cv_predict. Its STILL axes, a head that holds
+ * along them: x_p' = x_p + w_p, x_v' = w_v, w_p ~ N(0, q dt), w_v ~ N(0, q / 1 s). The still axes'
+ * velocity rows are cleared first, so that the CV transform leaves them alone. */
+static void predict_model(mvt_cv_state_t *s, mvt_real dt, const mvt_imm_model_t *m)
 {
+    if (mvt_imm_model_is(m, MVT_MOTION_CV)) {
+        (void)mvt_cv_predict(s, dt, m->q);
+        return;
+    }
     mvt_real *P = s->P;
+    mvt_real qcv[3];
+    int any_cv = 0;
     for (int i = 0; i < 3; i++) {
+        qcv[i] = MVT_R(0.0);
+        if (m->kind[i] == MVT_MOTION_CV) {
+            qcv[i] = m->q[i];
+            any_cv = 1;
+            continue;
+        }
         s->x[i + 3] = MVT_R(0.0);
         for (int j = 0; j < 6; j++) {
             P[(i + 3) * 6 + j] = MVT_R(0.0);
             P[j * 6 + (i + 3)] = MVT_R(0.0);
         }
     }
+    if (any_cv) {
+        (void)mvt_cv_predict(s, dt, qcv);
+    }
     for (int i = 0; i < 3; i++) {
-        P[i * 6 + i] += q[i] * dt;
-        P[(i + 3) * 6 + (i + 3)] = q[i];
+        if (m->kind[i] == MVT_MOTION_STILL) {
+            P[i * 6 + i] += m->q[i] * dt;
+            P[(i + 3) * 6 + (i + 3)] = m->q[i];
+        }
     }
 }
 
@@ -288,7 +316,7 @@ static mvt_err_t predict_to(mvt_imm_t *imm, const mvt_imm_config_t *c, int64_t u
                 mj->x[a] = xbar[a] + acc;
             }
             /* a standing model's prediction sets its velocity rows: only its position block is mixed */
-            mix_block(mj->P, c->model[j].kind == MVT_MOTION_STILL ? 3 : 6, wj, M, e);
+            mix_block(mj->P, mvt_imm_model_is(&c->model[j], MVT_MOTION_STILL) ? 3 : 6, wj, M, e);
         }
         mvt_real sum = MVT_R(0.0);
         for (int j = 0; j < n; j++) {
@@ -300,11 +328,7 @@ static mvt_err_t predict_to(mvt_imm_t *imm, const mvt_imm_config_t *c, int64_t u
     }
     for (int j = 0; j < n; j++) {
         mvt_cv_state_t *mj = &imm->m[j];
-        if (c->model[j].kind == MVT_MOTION_STILL) {
-            predict_still(mj, dt, c->model[j].q);
-        } else {
-            (void)mvt_cv_predict(mj, dt, c->model[j].q);
-        }
+        predict_model(mj, dt, &c->model[j]);
         mj->utime_us = utime_us;
     }
     combine(imm, c, s, nb);
@@ -508,7 +532,7 @@ static mvt_err_t update(mvt_imm_t *imm, const mvt_imm_config_t *c, int m, const 
     imm_upd_t u[MVT_IMM_MODELS];
     /* first every model's innovation, so that a failure changes nothing */
     for (int j = 0; j < n; j++) {
-        const int still = c->model[j].kind == MVT_MOTION_STILL;
+        const int still = mvt_imm_model_is(&c->model[j], MVT_MOTION_STILL);
         int ok;
         if (m == 2) {
             ok = still ? px3_innov(&imm->m[j], s, H, y, noise, &u[j]) : px6_innov(&imm->m[j], s, H, y, noise, &u[j]);

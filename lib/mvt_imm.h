@@ -15,12 +15,12 @@
  *   combine  the output (and what gating, occlusion and association use) is the mixture's mean
  *            and covariance: x = sum mu_j x_j, P = sum mu_j (P_j + (x_j - x)(x_j - x)^T)
  *
- * Model kinds:
- *   MVT_MOTION_CV     constant velocity, white acceleration of density q (m^2/s^3) per axis
+ * Model kinds, per axis (a model may walk in X and Y and hold its height, or the reverse):
+ *   MVT_MOTION_CV     constant velocity, white acceleration of density q (m^2/s^3) on the axis
  *                     (mvt_cv_predict)
- *   MVT_MOTION_STILL  a person standing: the head wanders as a random walk of diffusion q
- *                     (m^2/s) per axis and has no velocity of its own beyond a sway of variance
- *                     q / (1 s) that does not persist (F_vv = 0)
+ *   MVT_MOTION_STILL  the axis holds: the head wanders along it as a random walk of diffusion q
+ *                     (m^2/s) and has no velocity of its own beyond a sway of variance q / (1 s)
+ *                     that does not persist (F_vv = 0)
  * Switching is a continuous-time Markov chain: model j is left at rate leave_hz[j] (mean stay
  * 1 / leave_hz), for any of the other models alike, so over an interval dt
  * p_jj = exp(-leave_hz dt) and p_jk = (1 - p_jj) / (n - 1). It depends on dt, so the several
@@ -42,7 +42,7 @@
  * the combined position differs by 20 um over 200 frames (tests/test_oracle.cpp), and this way
  * each camera is projected once per track, not once per model.
  *
- * Statically allocated: MVT_IMM_MODELS (default 3) is the bank's capacity; a configuration uses
+ * Statically allocated: MVT_IMM_MODELS (default 4) is the bank's capacity; a configuration uses
  * 1..MVT_IMM_MODELS of them (mvt_imm_config_single, one model and p_outlier 0, is exactly the
  * single filter).
  */
@@ -56,7 +56,7 @@ extern "C" {
 #endif
 
 #ifndef MVT_IMM_MODELS
-#define MVT_IMM_MODELS 3
+#define MVT_IMM_MODELS 4
 #endif
 #if MVT_IMM_MODELS < 1 || MVT_IMM_MODELS > 8
 #error "MVT_IMM_MODELS must be in 1..8"
@@ -68,7 +68,7 @@ typedef enum mvt_motion_kind {
 } mvt_motion_kind_t;
 
 typedef struct mvt_imm_model {
-    mvt_motion_kind_t kind;
+    mvt_motion_kind_t kind[3]; /* per axis X, Y, Z */
     mvt_real q[3];      /* CV: acceleration density, m^2/s^3; STILL: diffusion, m^2/s; per axis, > 0 */
     mvt_real leave_hz;  /* rate of leaving this model, 1/s, >= 0 (0 with one model only) */
 } mvt_imm_model_t;
@@ -89,16 +89,23 @@ typedef struct mvt_imm {
 } mvt_imm_t;
 
 /* The default bank for people (docs/filters.md, "Motion that adapts"):
- *   0 STILL  q 2.5e-5 m^2/s (the head wanders 5 mm in a second), leaves at 0.2 /s (stands 5 s
- *            on average)
- *   1 CV     walking: q 0.3 m^2/s^3 horizontally (speed drifts ~0.5 m/s per second), 0.02
- *            vertically; leaves at 0.3 /s
- *   2 CV     manoeuvre (turn, start, stop): q 3 m^2/s^3 horizontally (~1.7 m/s^2 for ~1 s),
- *            0.1 vertically; leaves at 1.5 /s (lasts ~0.7 s) */
+ *   0 standing  STILL on every axis, q 2.5e-5 m^2/s (the head wanders 5 mm in a second); leaves
+ *               at 0.2 /s (stands 5 s on average)
+ *   1 walking   X, Y CV q 0.3 m^2/s^3 (speed drifts ~0.5 m/s per second); the height STILL,
+ *               q 4e-4 m^2/s (a walking head bobs ~2 cm, it does not climb); leaves at 0.3 /s
+ *   2 turning   CV, q 3 m^2/s^3 horizontally (a turn, a start, a stop: ~1.7 m/s^2 for ~1 s),
+ *               0.1 vertically (the one model in which a moving head may also correct its height:
+ *               a track born at a wrong height); leaves at 1.5 /s (lasts ~0.7 s)
+ *   3 sitting   X, Y STILL q 2.5e-5 m^2/s; the height CV q 1 m^2/s^3 (sitting down, getting up,
+ *   or rising  crouching: ~0.6 m/s for under a second); leaves at 1.3 /s (lasts ~0.75 s)
+ * A build with a smaller MVT_IMM_MODELS keeps the first models. */
 void mvt_imm_config_default(mvt_imm_config_t *c);
 
 /* A one-model bank that is exactly the single constant-velocity filter with q. */
 void mvt_imm_config_single(mvt_imm_config_t *c, const mvt_real q[3]);
+
+/* 1 when every axis of model m is of kind k. */
+int mvt_imm_model_is(const mvt_imm_model_t *m, mvt_motion_kind_t k);
 
 /* MVT_OK, or MVT_ERR_INVALID for a count out of range, an unknown kind, a q that is not finite
  * and > 0, or a leave rate that is not finite and >= 0. */

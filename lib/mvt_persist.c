@@ -78,7 +78,7 @@ static int estimate_ok(const mvt_tracker_config_t *c, const mvt_cv_state_t *s, i
  * model's estimate as good as the combined one and at its time, probabilities that sum to 1. */
 static int bank_ok(const mvt_tracker_config_t *c, const mvt_track_t *tr)
 {
-    if (c->motion.n == 1 && c->motion.model[0].kind == MVT_MOTION_CV) {
+    if (c->motion.n == 1 && mvt_imm_model_is(&c->motion.model[0], MVT_MOTION_CV)) {
         return 1;
     }
     mvt_real sum = MVT_R(0.0);

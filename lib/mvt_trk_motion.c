@@ -12,7 +12,7 @@
 
 static int single(const mvt_tracker_t *self)
 {
-    return self->cfg.motion.n == 1 && self->cfg.motion.model[0].kind == MVT_MOTION_CV;
+    return self->cfg.motion.n == 1 && mvt_imm_model_is(&self->cfg.motion.model[0], MVT_MOTION_CV);
 }
 
 void mvt_trk_start(mvt_tracker_t *self, mvt_track_t *tr, const mvt_real x[3], const mvt_real cov[9], int64_t utime_us)

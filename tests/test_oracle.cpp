@@ -334,7 +334,7 @@ struct OracleImm {
         Q.setZero();
         for (int i = 0; i < 3; i++) {
             const double q = cfg.model[j].q[i];
-            if (cfg.model[j].kind == MVT_MOTION_STILL) {
+            if (cfg.model[j].kind[i] == MVT_MOTION_STILL) {
                 F(3 + i, 3 + i) = 0.0;
                 Q(i, i) = q * dt;
                 Q(3 + i, 3 + i) = q;
@@ -448,14 +448,16 @@ static void test_mvt_imm_matches_eigen_textbook_imm(void **state)
             for (int b = 0; b < 6; b++) o.P[j](a, b) = s.P[a * 6 + b];
         }
     }
-    /* stands 2 s, walks east at 1 m/s, turns north sharply at 4 s, stops at 6 s */
+    /* stands 2 s, walks east at 1 m/s, turns north sharply at 4 s, stops at 6 s, sits down at 8 s
+     * (the head drops 0.48 m in 0.8 s) and stays seated */
     Eigen::Vector3d truth(2.5, 2.0, 1.7);
     double worst = 0, worst_mu = 0;
-    double mu_at[3][MVT_IMM_MODELS];
-    for (int step = 1; step <= 200; step++) {
+    double mu_at[5][MVT_IMM_MODELS];
+    for (int step = 1; step <= 260; step++) {
         const double t = step * 0.04;
         const Eigen::Vector3d v = t < 2 ? Eigen::Vector3d(0, 0, 0) : t < 4 ? Eigen::Vector3d(1, 0, 0)
-                                  : t < 6 ? Eigen::Vector3d(0, 1, 0) : Eigen::Vector3d(0, 0, 0);
+                                  : t < 6 ? Eigen::Vector3d(0, 1, 0) : t > 8 && t <= 8.8 ? Eigen::Vector3d(0, 0, -0.6)
+                                                                                       : Eigen::Vector3d(0, 0, 0);
         truth += 0.04 * v;
         const int64_t us = (int64_t)step * 40000;
         assert_int_equal(mvt_imm_predict_to(&imm, &cfg, us, &s), MVT_OK);
@@ -500,18 +502,22 @@ static void test_mvt_imm_matches_eigen_textbook_imm(void **state)
             sum += imm.mu[j];
         }
         assert_true(std::fabs(sum - 1.0) < 1e-5);
-        const int mark = step == 45 ? 0 : step == 105 ? 1 : step == 199 ? 2 : -1;
+        const int mark = step == 45 ? 0 : step == 105 ? 1 : step == 199 ? 2 : step == 214 ? 3 : step == 260 ? 4 : -1;
         if (mark >= 0)
             for (int j = 0; j < cfg.n; j++) mu_at[mark][j] = imm.mu[j];
     }
-    /* the bank says what the person does: standing, then walking/manoeuvring, then standing */
+    /* the bank says what the person does: standing, then walking/turning, then standing, sitting
+     * down (model 3, the height's own manoeuvre), seated */
     assert_true(mu_at[0][0] > 0.8);
     assert_true(mu_at[1][0] < 0.05);
     assert_true(mu_at[2][0] > 0.8);
-    std::printf("# IMM (p_outlier %.2f) vs the textbook IMM over 200 steps: worst |x| %.3g m, worst |mu| %.3g; "
-                "P(still) %.2f / %.2f / %.2f at 1.8 s / 4.2 s / 8 s; the per-frame combination's path differs by "
-                "%.2g (relative)\n", (double)cfg.p_outlier, worst, worst_mu, (double)mu_at[0][0], (double)mu_at[1][0],
-                (double)mu_at[2][0], worst_lean);
+    assert_true(cfg.n < 4 || mu_at[3][3] > 0.5);
+    assert_true(mu_at[4][0] > 0.8);
+    std::printf("# IMM (p_outlier %.2f) vs the textbook IMM over 260 steps: worst |x| %.3g m, worst |mu| %.3g; "
+                "P(still) %.2f / %.2f / %.2f / %.2f at 1.8 s / 4.2 s / 8 s / 10.4 s, P(sitting) %.2f at 8.56 s; the "
+                "per-frame combination's path differs by %.2g (relative)\n", (double)cfg.p_outlier, worst, worst_mu,
+                (double)mu_at[0][0], (double)mu_at[1][0], (double)mu_at[2][0], (double)mu_at[4][0],
+                cfg.n < 4 ? -1.0 : (double)mu_at[3][3], worst_lean);
   }
 }
 

@@ -100,7 +100,8 @@ def test_daemon_motion_options(tmp_path, daemon_path):
     rig, rp, sp = make_exp1(tmp_path, 100.0, True, 8.0, seed=31)
     outs = {}
     for name, args in (("default", []),
-                       ("spelt", ["--motion-models", "still:2.5e-5:2.5e-5:0.2;cv:0.3:0.02:0.3;cv:3:0.1:1.5"]),
+                       ("spelt", ["--motion-models", "still:2.5e-5:2.5e-5:0.2;cv/still:0.3:4e-4:0.3;"
+                                                   "cv:3:0.1:1.5;still/cv:2.5e-5:1:1.3"]),
                        ("other", ["--motion-models", "still:1e-4:1e-4:0.2;cv:1:0.05:0.2"]),
                        ("cv", ["--motion", "cv"]), ("q", ["--q", "0.5,0.5,0.05"])):
         out = tmp_path / f"{name}.lcm"
@@ -110,7 +111,8 @@ def test_daemon_motion_options(tmp_path, daemon_path):
     assert outs["other"] != outs["default"]
     assert outs["cv"] == outs["q"] and outs["cv"] != outs["default"]
     for bad in (["--motion", "imm", "--q", "1,1,1"], ["--motion-models", "cv:1:x"], ["--motion-models", "walk:1:1:1"],
-                ["--motion-models", "cv:-1:1:1"], ["--motion", "fast"]):
+                ["--motion-models", "cv:-1:1:1"], ["--motion-models", "cv/:1:1:1"], ["--motion-models", "cv/walk:1:1:1"],
+                ["--motion-models", "cv/still/cv:1:1:1"], ["--motion", "fast"]):
         r = run(daemon_path, rp, sp, tmp_path / "bad.lcm", *bad, check=False)
         assert r.returncode == 2, (bad, r.stderr)
         assert "mvtrackd:" in r.stderr

@@ -266,3 +266,30 @@ def test_learn_q_command_pools_people_and_skips_gaps(tmp_path, capsys):
     empty = tmp_path / "empty.lcm"
     LogWriter(str(empty)).close()
     assert learnq_main([str(empty)]) == 2
+
+
+def test_oracles_reach_the_bound_they_should():
+    """motion --oracles: the EKF told the mixed scene's schedule sits on the schedule-conditioned
+    PCRLB (it is the bound's own filter, run on noisy detections), the IMM of the generator's
+    segment models that is not told the schedule is above it, and on Experiment 1's walk the EKF
+    of the walk's own model is at the bound."""
+    from mvtrack_tools import oracle
+    from mvtrack_tools.motion_eval import draw
+    from mvtrack_tools.scenes import head_detections
+    rig = smartroom()
+    var = 100.0
+    ratios = {}
+    for kind in ("mixed", "exp1"):
+        states, Fs, Qs, P0, rng, bs = draw(kind, rig, 30.0, 2)
+        dets = head_detections(rig, states[:, :3], var, rng, None)
+        seen = np.array([[bool(dets[f][k]) for k in range(len(rig.cameras))] for f in range(len(states))])
+        bound = pcrlb_known(rig, states[:, :3], Fs, Qs, P0, var, seen)
+        refs = (oracle.mixed_references(rig, dets, var, states, Fs, Qs, bs, P0) if kind == "mixed" else
+                oracle.exp1_references(rig, dets, var, states, learn_q(states[:, :3], 0.04)))
+        for name, est in refs.items():
+            e2 = np.sum((est - states[:, :3]) ** 2, axis=1)
+            ratios[name] = float(np.sqrt(e2[5:].mean() / bound[5:].mean()))
+    assert 0.85 < ratios["kf-schedule"] < 1.1, ratios
+    assert 0.85 < ratios["ekf-true"] < 1.1, ratios
+    assert ratios["imm-generator"] > ratios["kf-schedule"], ratios
+    assert ratios["imm-generator"] < 1.5, ratios

@@ -114,15 +114,16 @@ def next_segments(rng: np.random.Generator, last: str, dt: float, seated: bool) 
 
 
 def sample_mixed(rng: np.random.Generator, n: int, dt: float, vmin, vmax, margin: float = 0.4,
-                 tries: int = 200):
-    """(states (n, 6), Fs, Qs, kinds, P0) of a mixed-motion path that stays inside the room."""
+                 tries: int = 200, with_offsets: bool = False):
+    """(states (n, 6), Fs, Qs, kinds, P0) of a mixed-motion path that stays inside the room; with
+    with_offsets, also each frame's offset b (s' = F s + b + w: the seated head's known speed)."""
     lo = np.asarray(vmin, float)[:2] + margin
     hi = np.asarray(vmax, float)[:2] - margin
     centre = 0.5 * (lo + hi)
     P0 = np.diag([0.01 ** 2] * 3 + [0.01 ** 2] * 3)
     s = np.empty((n, 6))
     s[0] = np.r_[centre + rng.uniform(-0.3, 0.3, 2) * (hi - lo), 1.70, 0, 0, 0] + np.sqrt(np.diag(P0)) * rng.standard_normal(6)
-    Fs, Qs, kinds = [np.eye(6)], [np.zeros((6, 6))], ["stand"]
+    Fs, Qs, bs, kinds = [np.eye(6)], [np.zeros((6, 6))], [np.zeros(6)], ["stand"]
     f0, last, seated = 1, "stand", False
     first = Segment("stand", int(round(rng.uniform(2.0, 5.0) / dt)))
     pending = [first]
@@ -157,11 +158,14 @@ def sample_mixed(rng: np.random.Generator, n: int, dt: float, vmin, vmax, margin
         s[f0:f0 + m] = out
         Fs += [F] * m
         Qs += [Q] * m
+        bs += [b] * m
         kinds += [seg.kind] * m
         if seg.kind == "sit":
             seated = seg.sit_dir < 0
         f0 += m
         last = seg.kind if seg.kind != "turn" else "walk"
+    if with_offsets:
+        return s, Fs, Qs, kinds, P0, bs
     return s, Fs, Qs, kinds, P0
 
 

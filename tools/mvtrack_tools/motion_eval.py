@@ -16,6 +16,12 @@ place of the head): mean error and the bound that knows which views were corrupt
 over the clean views only). A standing test adds jitter: the std of the estimate of a person who
 stands still for 10 s (after 5 s to settle).
 
+--oracles adds reference filters on the Gaussian scenes (tools/mvtrack_tools/oracle.py, numpy,
+every detection used): what knowing the generator is worth. exp1: ekf-true (the walk's own model,
+its pull to the room's centre included) and ekf-cv-learnt; mixed: kf-schedule (told when the
+person stops, turns or sits: it should sit on the bound) and imm-generator (an IMM of the
+generator's own segment models, not told the schedule).
+
     tools/mvtrack motion [--rooms 3] [--seeds 3] [--levels 50 150 300] [--out out/motion]
 """
 from __future__ import annotations
@@ -28,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import motion
+from . import motion, oracle
 from .evaluate import learn_q, match_single, pcrlb_known
 from .experiment1 import run_daemon
 from .lcmio import LogWriter, read_log
@@ -67,7 +73,8 @@ def rooms(n: int) -> list[tuple[str, Rig]]:
 
 
 def draw(kind: str, rig: Rig, seconds: float, seed: int):
-    """states (n, 6), the bound's transitions (Fs, Qs, P0)."""
+    """states (n, 6), the bound's transitions (Fs, Qs, P0), the rng, and each frame's offset b
+    (s' = F s + b + w) for the mixed scenes (None otherwise)."""
     rng = np.random.default_rng(seed)
     dt = 1.0 / rig.frame_rate
     n = int(round(seconds * rig.frame_rate))
@@ -75,12 +82,12 @@ def draw(kind: str, rig: Rig, seconds: float, seed: int):
         model = WalkModel.for_room(rig.volume_min, rig.volume_max)
         states = model.sample(rng, n, dt, rig.volume_min, rig.volume_max)
         F, Q, _ = model.transition(dt)
-        return states, [F] * n, [Q] * n, model.stationary_cov(), rng
+        return states, [F] * n, [Q] * n, model.stationary_cov(), rng, None
     if kind == "stand":
         states, Fs, Qs, P0 = motion.sample_standing(rng, n, dt, rig.volume_min, rig.volume_max)
-        return states, Fs, Qs, P0, rng
-    states, Fs, Qs, _, P0 = motion.sample_mixed(rng, n, dt, rig.volume_min, rig.volume_max)
-    return states, Fs, Qs, P0, rng
+        return states, Fs, Qs, P0, rng, None
+    states, Fs, Qs, _, P0, bs = motion.sample_mixed(rng, n, dt, rig.volume_min, rig.volume_max, with_offsets=True)
+    return states, Fs, Qs, P0, rng, bs
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -96,6 +103,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--no-occlusion", action="store_true", help="Gaussian noise only")
     ap.add_argument("--extra", default="", help="more daemon arguments for every variant (quoted)")
     ap.add_argument("--jobs", type=int, default=2, help="scenes in parallel (default 2)")
+    ap.add_argument("--oracles", action="store_true",
+                    help="add the reference filters (oracle.py) on the Gaussian scenes (~2 s a filter and scene)")
     ap.add_argument("--quiet", action="store_true")
     a = ap.parse_args(argv)
     if not DAEMON.exists():
@@ -124,7 +133,7 @@ def main(argv: list[str] | None = None) -> int:
         tag = f"{name}_{kind}_var{int(var)}_{'occ' if occ else 'gauss'}_s{seed}"
         scene = out / "logs" / f"scene_{tag}.lcm"
         seconds = 15.0 if kind == "stand" else a.seconds
-        states, Fs, Qs, P0, rng = draw(kind, rig, seconds, seed)
+        states, Fs, Qs, P0, rng, bs = draw(kind, rig, seconds, seed)
         dets = head_detections(rig, states[:, :3], var, rng, Occlusions() if occ else None)
         w = LogWriter(str(scene))
         write_scene(w, rig, states, dets, var, progress=False, frame_order_seed=seed)
@@ -144,6 +153,12 @@ def main(argv: list[str] | None = None) -> int:
                 run_daemon(rig_paths[name], scene, tr, "pkf", None, args + extra)
             gt, est, _ = match_single(read_log(str(tr), lambda c: c == "TRACKS"), truth)
             res[v] = (gt, est)
+        if a.oracles and not occ and kind == "exp1":
+            for v, est in oracle.exp1_references(rig, dets, var, states, learnt[(name, kind)]).items():
+                res[v] = (states[:, :3], est)
+        elif a.oracles and not occ and kind == "mixed":
+            for v, est in oracle.mixed_references(rig, dets, var, states, Fs, Qs, bs, P0).items():
+                res[v] = (states[:, :3], est)
         return job, res, bound
 
     cells: dict[tuple, dict] = {}
@@ -184,18 +199,21 @@ def main(argv: list[str] | None = None) -> int:
     (out / "results.json").write_text(json.dumps(dict(rows=rows, stand=stand, learnt_q={
         f"{k[0]}/{k[1]}": q.tolist() for k, q in learnt.items()}), indent=1))
 
+    columns = list(a.variants) + ([] if not a.oracles else
+                                  [v for v in ("ekf-true", "ekf-cv-learnt", "kf-schedule", "imm-generator")
+                                   if any(r["variant"] == v for r in rows)])
     lines = []
     for occ in sorted({r["occlusion"] for r in rows}):
         what = "mean error / bound over the clean views" if occ else "RMSE / PCRLB"
         lines.append(f"**{'occlusion bursts' if occ else 'Gaussian noise'}**: {what} "
                      f"(unmatched frames in brackets)\n")
-        lines.append("| room | scene | sigma^2 | " + " | ".join(a.variants) + " |")
-        lines.append("|---" * (3 + len(a.variants)) + "|")
+        lines.append("| room | scene | sigma^2 | " + " | ".join(columns) + " |")
+        lines.append("|---" * (3 + len(columns)) + "|")
         for name, _ in room_list:
             for kind in a.kinds:
                 for var in a.levels:
                     cells_txt = []
-                    for v in a.variants:
+                    for v in columns:
                         r = next((r for r in rows if r["room"] == name and r["kind"] == kind and r["occlusion"] == occ
                                   and r["var"] == var and r["variant"] == v), None)
                         if r is None:
