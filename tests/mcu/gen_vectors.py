@@ -147,10 +147,13 @@ def main():
         P = IKH @ P @ IKH.T + K @ (np.eye(2) * sig ** 2) @ K.T
     out.append(f"#define MCU_PKF_SIGMA {sig}f\n" + arr("pkf_z", zs) + arr("pkf_x", x) + arr("pkf_P", P))
 
-    # IMM (the default bank: standing / walking / manoeuvring, robust PDA-form pixel updates):
-    # the textbook recursion in numpy, each model's EKF linearised at its own estimate; a person
-    # stands, walks off and turns, 60 frames, 4 cameras, one displaced detection now and then
-    bank = [("still", [2.5e-5] * 3, 0.2), ("cv", [0.3, 0.3, 0.02], 0.3), ("cv", [3.0, 3.0, 0.1], 1.5)]
+    # IMM (the default bank: standing / walking / manoeuvring / sitting, each axis constant velocity
+    # or holding, robust PDA-form pixel updates): the textbook recursion in numpy, each model's EKF
+    # linearised at its own estimate; a person stands, walks off and turns, 60 frames, 4 cameras,
+    # one displaced detection now and then
+    S_, C_ = "still", "cv"
+    bank = [((S_, S_, S_), [2.5e-5] * 3, 0.2), ((C_, C_, S_), [0.3, 0.3, 4e-4], 0.3),
+            ((C_, C_, C_), [3.0, 3.0, 0.1], 1.5), ((S_, S_, C_), [2.5e-5, 2.5e-5, 1.0], 1.3)]
     eps, rad = 0.1, 150.0
     nm = len(bank)
     xs0 = np.array([2.6, 2.4, 1.7, 0.0, 0.0, 0.0])
@@ -173,12 +176,15 @@ def main():
         x0 = [sum(p[i, j] * mu[i] / c[j] * xm[i] for i in range(nm)) for j in range(nm)]
         Pmix = [sum(p[i, j] * mu[i] / c[j] * (Pm[i] + np.outer(xm[i] - x0[j], xm[i] - x0[j])) for i in range(nm))
                 for j in range(nm)]
-        for j, (kind, q, _) in enumerate(bank):
-            if kind == "still":
-                F = np.eye(6); F[3:, 3:] = 0
-                Q = np.diag([q[0] * dt, q[1] * dt, q[2] * dt, q[0], q[1], q[2]])
-            else:
-                F = F_of(dt); Q = q_block(q, dt)
+        for j, (kinds, q, _) in enumerate(bank):
+            F = F_of(dt)
+            Q = q_block([qa if ka == "cv" else 0.0 for ka, qa in zip(kinds, q)], dt)
+            for ax, ka in enumerate(kinds):
+                if ka == "still":
+                    F[ax, 3 + ax] = 0.0
+                    F[3 + ax, 3 + ax] = 0.0
+                    Q[ax, ax] = q[ax] * dt
+                    Q[3 + ax, 3 + ax] = q[ax]
             xm[j] = F @ x0[j]
             Pm[j] = F @ Pmix[j] @ F.T + Q
         mu = c

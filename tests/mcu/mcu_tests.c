@@ -173,7 +173,7 @@ static void test_imm(void)
     for (int j = 0; j < cfg.n; j++) {
         check(fabsf(imm.mu[j] - imm_mu[j]) < 0.01f, "IMM model probability vs numpy", imm.mu[j], imm_mu[j]);
     }
-    report("filter: IMM (3 models, robust) 60 frames x 4 views vs numpy textbook IMM, worst position", f0, "", worst, 7);
+    report("filter: IMM (4 models, robust) 60 frames x 4 views vs numpy textbook IMM, worst position", f0, "", worst, 7);
 }
 
 static mvt_assoc_ws_t g_ws;
