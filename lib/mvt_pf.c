@@ -236,6 +236,12 @@ void mvt_pf_predict(mvt_pf_pool_t *p, mvt_real dt_s, const mvt_pf_noise_t *noise
     }
 }
 
+/* The likelihood level from which a pixel counts as foreground: halfway from the floor to 1. */
+static inline uint8_t fg_threshold(const mvt_pf_tables_t *tab)
+{
+    return (uint8_t)(((int)tab->d_floor + 255) / 2);
+}
+
 /* Mask index of the camera-frame point (X, Y, Z), or -1: behind the camera, outside the lens
  * model's window or outside the mask. O(1). */
 static inline int view_index(const mvt_camera_t *c, const mvt_pf_fov_t *f, const mvt_pf_image_t *img,
@@ -253,6 +259,22 @@ static inline int view_index(const mvt_camera_t *c, const mvt_pf_fov_t *f, const
     mvt_real xd[2];
     mvt_cam_distort_value(c, xn, yn, xd);
     return mvt_pf_image_index(img, c->fx * xd[0] + c->skew * xd[1] + c->cx, c->fy * xd[1] + c->cy);
+}
+
+int mvt_pf_point_on_fg(const mvt_camera_t *cam, const mvt_pf_fov_t *fov, const mvt_pf_image_t *img,
+                       const mvt_pf_tables_t *tab, const mvt_real xw[3])
+{
+    MVT_ASSERT(cam != NULL && fov != NULL && img != NULL && tab != NULL && xw != NULL);
+    if (img->width < 1) {
+        return -1;
+    }
+    mvt_real xc[3];
+    mvt_cam_to_camera(cam, xw, xc);
+    const int idx = view_index(cam, fov, img, xc[0], xc[1], xc[2]);
+    if (idx < 0) {
+        return -1;
+    }
+    return img->d[idx] > fg_threshold(tab);
 }
 
 /* Log of Eq. 11 x Eq. 13 for a particle's colour state at mask pixel idx (foreground) or the
@@ -299,7 +321,7 @@ void mvt_pf_weight(mvt_pf_pool_t *p, const mvt_camera_t *cams, const mvt_pf_fov_
                    mvt_real on_fg[], mvt_real hidden[])
 {
     MVT_ASSERT(p != NULL && cams != NULL && fovs != NULL && images != NULL && tab != NULL);
-    const uint8_t fg_level = (uint8_t)(((int)tab->d_floor + 255) / 2);
+    const uint8_t fg_level = fg_threshold(tab);
     for (int k = 0; k < num_cams; k++) {
         const mvt_pf_image_t *img = &images[k];
         if (on_fg != NULL) {

@@ -110,6 +110,12 @@ typedef struct mvt_pf_fov {
  * size). A border point the model cannot invert narrows nothing: the pinhole bound is used. */
 void mvt_pf_fov_init(mvt_pf_fov_t *fov, const mvt_camera_t *cam, mvt_real margin);
 
+/* Where the world point xw falls in camera cam's likelihood image: 1 on foreground (above
+ * halfway from the floor to 1, as the weighting's support counts it), 0 on background, -1 unseen
+ * (no image this frame, behind the camera, outside the lens model's window or the mask). O(1). */
+int mvt_pf_point_on_fg(const mvt_camera_t *cam, const mvt_pf_fov_t *fov, const mvt_pf_image_t *img,
+                       const mvt_pf_tables_t *tab, const mvt_real xw[3]);
+
 /* One target's particles, structure of arrays. */
 typedef struct mvt_pf_pool {
     int n;                                   /* particles, 1..MVT_MAX_PARTICLES */

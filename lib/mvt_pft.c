@@ -226,15 +226,45 @@ static int stronger(const mvt_pft_target_t *a, const mvt_pft_target_t *b)
     return ta != tb ? ta < tb : a->id < b->id;
 }
 
-/* The order the targets are weighted in when pixels are shared out, strongest first. A target
- * that lost its person, or a ghost, has had little support for a while and comes after the
- * person's own target, so it cannot take that person's pixels. Insertion sort, O(T^2); sort 0:
- * slot order. Returns the number of live targets. */
-static int rank_targets(mvt_pft_t *self, int sort)
+/* Strength with this frame's evidence folded in, before weighting: the share of the cameras that
+ * see it in which three points of its predicted body (legs, middle, torso) mostly fall on
+ * foreground, smoothed into strength as the weighting will. A target whose person has just left
+ * (or a ghost) ranks after a person seen where predicted, however alike their histories. The
+ * strength itself is not changed. O(C). */
+static mvt_real rank_strength(const mvt_pft_t *self, int t, mvt_real dt)
+{
+    const mvt_pft_target_t *a = &self->targets[t];
+    const mvt_real *m = self->centre[t];
+    const mvt_real frac[3] = {MVT_R(0.3), MVT_R(0.5), MVT_R(0.7)}; /* of the head top's height */
+    int seen = 0, on = 0;
+    for (int k = 0; k < self->det.num_cameras; k++) {
+        int n_seen = 0, n_on = 0;
+        for (int j = 0; j < 3; j++) {
+            const mvt_real xw[3] = {m[0], m[1], frac[j] * a->est.head_z};
+            const int r = mvt_pf_point_on_fg(&self->det.cams[k], &self->fovs[k], &self->images[k], &self->tab, xw);
+            n_seen += r >= 0;
+            n_on += r > 0;
+        }
+        seen += n_seen > 0;
+        on += n_seen > 0 && 2 * n_on > n_seen;
+    }
+    if (seen == 0) {
+        return a->strength;
+    }
+    return a->strength + (MVT_R(1.0) - MVT_EXP(-dt)) * ((mvt_real)on / (mvt_real)seen - a->strength);
+}
+
+/* The order the targets are weighted in when pixels are shared out, strongest first
+ * (rank_strength, then confirmed before tentative, then the older). A target that lost its person,
+ * or a ghost, has had little support for a while, or none this frame, and comes after the
+ * person's own target, so it cannot take that person's pixels. Insertion sort, O(T^2 + T C);
+ * sort 0: slot order. Returns the number of live targets. */
+static int rank_targets(mvt_pft_t *self, int sort, mvt_real dt)
 {
     int n = 0;
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         if (self->targets[t].id != 0) {
+            self->rank_key[t] = sort ? rank_strength(self, t, dt) : MVT_R(0.0);
             self->rank[n++] = (int16_t)t;
         }
     }
@@ -242,8 +272,16 @@ static int rank_targets(mvt_pft_t *self, int sort)
         const int16_t cur = self->rank[i];
         const mvt_pft_target_t *a = &self->targets[cur];
         int j = i - 1;
-        for (; j >= 0 && !stronger(&self->targets[self->rank[j]], a); j--) { /* the weaker ones move right */
-            self->rank[j + 1] = self->rank[j];
+        for (; j >= 0; j--) { /* the weaker ones move right */
+            const int16_t o = self->rank[j];
+            const mvt_pft_target_t *b = &self->targets[o];
+            const int ta = a->status == MVT_TRACK_TENTATIVE, tb = b->status == MVT_TRACK_TENTATIVE;
+            const int b_first = self->rank_key[o] > self->rank_key[cur] ||
+                                (!(self->rank_key[o] < self->rank_key[cur]) && (ta != tb ? tb < ta : b->id < a->id));
+            if (b_first) {
+                break;
+            }
+            self->rank[j + 1] = o;
         }
         self->rank[j + 1] = cur;
     }
@@ -509,7 +547,7 @@ mvt_err_t mvt_pft_step(mvt_pft_t *self, const mvt_frame_t *frame, mvt_output_t *
             memset(cl->depth, 0, (size_t)cl->width * (size_t)cl->height);
         }
     }
-    const int live = rank_targets(self, shared);
+    const int live = rank_targets(self, shared, dt);
     /* head-top hypotheses keep their height: no renewal over the body */
     mvt_pf_noise_t noise = c->noise;
     noise.z_renew = c->column ? MVT_R(0.0) : noise.z_renew;

@@ -74,8 +74,10 @@ typedef struct mvt_pft_config {
                                    default 0.2 */
     int share_pixels;           /* 1 (default): each camera's pixels are shared out between the
                                    targets (mvt_pf_claims_t): the targets are weighted one after
-                                   another, strongest first (strength, then confirmed before
-                                   tentative, then the older), and each one's
+                                   another, strongest first (strength with this frame's
+                                   evidence folded in: where the predicted body falls on
+                                   foreground; then confirmed before tentative, then the
+                                   older), and each one's
                                    silhouette at its new estimate claims its pixels for the targets
                                    after it; a camera where most of a target's head hypotheses are
                                    on claimed pixels cannot tell whether it is there (hidden), and
@@ -149,6 +151,7 @@ typedef struct mvt_pft {
     mvt_real centre[MVT_MAX_TARGETS][3];  /* targets' predicted centres for the exclusion prior */
     mvt_pf_claims_t claims[MVT_MAX_CAMERAS]; /* share_pixels: what the targets weighted so far explain */
     int16_t rank[MVT_MAX_TARGETS];        /* share_pixels: the order the targets are weighted in */
+    mvt_real rank_key[MVT_MAX_TARGETS];   /* share_pixels: strength with this frame's evidence (ranking) */
 } mvt_pft_t;
 
 /* Documented defaults (det: mvt_tracker_config_default). */

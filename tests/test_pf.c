@@ -529,10 +529,13 @@ static void add_head(mvt_view_t *v, int k, const double h[3])
 
 /* g_pft in the 6 x 5 x 2.5 m test room: particles per target, pixels shared or not, identity
  * recovery time. */
+static uint64_t g_seed = 1; /* the particle filters' random seed in init_room_pft */
+
 static void init_room_pft(int particles, int share, mvt_real recover_s)
 {
     mvt_pft_config_t cfg;
     mvt_pft_config_default(&cfg);
+    cfg.seed = g_seed;
     cfg.num_particles = particles;
     cfg.share_pixels = share;
     cfg.recover_s = recover_s;
@@ -625,11 +628,17 @@ static void test_pft_person_leaving_beside_another_does_not_take_them(void **sta
     assert_int_equal(test_room_cameras(g_cams, 1), 0);
     int32_t before, after;
     int num_end, linger;
-    run_leave_beside(1, &before, &after, &num_end, &linger);
-    if (!(before > 0 && after == before && num_end == 1 && linger <= 15))
-        fail_msg("shared pixels: B %d -> %d, %d targets at the end, a false target in %d frames after A left",
-                 before, after, num_end, linger);
-    print_message("shared pixels: B keeps identity %d; a false target in %d of 100 frames after A left\n", after, linger);
+    /* several random streams: which of A's and B's targets is weighted first when A vanishes must
+     * not be a coin toss (it was when only their histories ranked them: 4 of 12 seeds failed) */
+    for (g_seed = 1; g_seed <= 8; g_seed++) {
+        run_leave_beside(1, &before, &after, &num_end, &linger);
+        if (!(before > 0 && after == before && num_end == 1 && linger <= 15))
+            fail_msg("seed %d, shared pixels: B %d -> %d, %d targets at the end, a false target in %d frames after A left",
+                     (int)g_seed, before, after, num_end, linger);
+        print_message("seed %d, shared pixels: B keeps identity %d; a false target in %d of 100 frames after A left\n",
+                      (int)g_seed, after, linger);
+    }
+    g_seed = 1;
     run_leave_beside(0, &before, &after, &num_end, &linger); /* for the record: independent filters */
     print_message("independent: B %d -> %d, %d targets at the end, a false target in %d of 100 frames\n", before,
                   after, num_end, linger);
