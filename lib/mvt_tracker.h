@@ -139,7 +139,9 @@ typedef struct mvt_tracker_config {
                                    clutter detection there; every view with boxes that shows its
                                    place in no blob by 1 - p_detect; it is born when the product is
                                    >= 1. A tentative or confirmed track is refuted in a frame the
-                                   same way */
+                                   same way. Association weighs it too: a track's miss costs
+                                   2 ln(p_detect / (1 - p_detect)) - 2 ln(2 pi lambda) against a
+                                   detection's d^2 + ln |S| (mvt_trk_assoc.c) */
     mvt_real recover_s;         /* identity recovery: a confirmed track deleted while its person may
                                    still be in the room (unseen, hidden too long, contradicted, or
                                    the duplicate that drifted onto another's person; not one that

@@ -3,8 +3,10 @@
  *
  * Hypotheses: each live track's predicted observation in the camera (mvt_pkf_pred_t), gated
  * against every detection. Association: global nearest neighbour by the Hungarian method on each
- * cluster of tracks linked through shared gated detections, with a "missed" column per track at
- * the gate's cost, so one detection feeds at most one track. Merged blobs: tracks whose image
+ * cluster of tracks linked through shared gated detections, by likelihood (a detection costs
+ * d^2 + ln |S| plus its colour's -2 ln LR; a "missed" column per track costs what p_detect and the
+ * view's clutter density make of a miss, miss_cost), so one detection feeds at most one track and
+ * a track whose prediction is wide does not take a detection that a sharper one predicted. Merged blobs: tracks whose image
  * points are closer than merge_width_m seen at their depth are unresolved in this view. When the
  * Hungarian method gives a detection to one of them and leaves an unresolved neighbour without
  * one although the detection lies in its gate too, the detection may be the two people's merged
@@ -45,16 +47,32 @@ static mvt_real app_cost(const mvt_tracker_t *self, int k, int t, int d)
     return (usable ? mvt_trk_app_cost(&self->tracks[t].app, self->chroma[k][d]) : MVT_R(0.0)) - self->app_shift[t];
 }
 
-/* The cost of track t missing this view: the gate (a detection inside it is likelier the track's
- * than nothing), shifted like app_cost. A detection near the gate's edge whose colour is not the
- * person's is then left: its likelihood ratio is below 1. */
-static mvt_real miss_cost(const mvt_tracker_t *self, int t)
+/* The cost of track t missing camera k's view, in the same -2 ln likelihood-ratio units as a
+ * detection's cost (d^2 + ln |S| + the colour's, below): the track is detected with p_detect, a
+ * detection it does not take is clutter at the view's density lambda (ev_clutter), so giving it a
+ * detection is worth -2 ln(p_detect N(y; 0, S) / lambda) against -2 ln(1 - p_detect) for missing
+ * it. With the 2 pi and the terms every row shares moved here, the miss costs
+ * 2 ln(p_detect / (1 - p_detect)) - 2 ln(2 pi lambda), shifted like app_cost. A track whose
+ * prediction is uncertain (|S| large: coasting, hidden) spreads its likelihood thin, so it loses a
+ * detection to a track that predicted it well, and takes one alone only nearer than the chi-square
+ * gate (which still bounds every track). Never below 0. */
+static mvt_real miss_cost(const mvt_tracker_t *self, int k, int t)
 {
     const mvt_tracker_config_t *c = &self->cfg;
     if (c->gate == MVT_GATE_PAPER) {
         return c->paper_delta;
     }
-    return c->gate_chi2 - self->app_shift[t];
+    const mvt_real pd = c->p_detect;
+    const mvt_real g = MVT_R(2.0) * (MVT_LOG(pd / (MVT_R(1.0) - pd)) - MVT_LOG(MVT_R(6.2831853) * self->ev_clutter[k]));
+    return (g > MVT_R(0.0) ? g : MVT_R(0.0)) - self->app_shift[t];
+}
+
+/* The spread part of a detection's cost, ln |S| (px^4), floored at 0 (|S| >= r^2 >= 1 px^4 with
+ * any usable pixel noise, so the floor does not bind) to keep costs non-negative. */
+static mvt_real spread_cost(const mvt_pkf_innov_t *in)
+{
+    const mvt_real det = in->S[0] * in->S[2] - in->S[1] * in->S[1];
+    return det > MVT_R(1.0) ? MVT_LOG(det) : MVT_R(0.0);
 }
 
 /* The second moment D D^T / 3 (packed xx xy yy) of a uniform offset of up to D = (dx, dy) pixels
@@ -229,7 +247,7 @@ static int hypothesise(mvt_tracker_t *self, const mvt_view_t *view, int k, const
                                 self->chroma_ok[k][d] = 0;
                             }
                         }
-                        cost = in.d2 + app_cost(self, k, t, d);
+                        cost = in.d2 + spread_cost(&in) + app_cost(self, k, t, d);
                         const mvt_real det = in.S[0] * in.S[2] - in.S[1] * in.S[1];
                         if (tentative && det > MVT_R(0.0)) {
                             g += MVT_EXP(MVT_R(-0.5) * in.d2) / (MVT_R(6.2831853) * MVT_SQRT(det));
@@ -295,7 +313,7 @@ static void solve_cluster(mvt_tracker_t *self, int k, int r, const int live[], i
     }
     if (nr == 1 && nc == 1) {
         const int t = self->cl_rows[0], d = self->cl_cols[0];
-        if (self->cost[t][d] <= miss_cost(self, t)) {
+        if (self->cost[t][d] <= miss_cost(self, k, t)) {
             assign[t] = d;
         }
         return;
@@ -307,7 +325,7 @@ static void solve_cluster(mvt_tracker_t *self, int k, int r, const int live[], i
             row[j] = self->cost[self->cl_rows[i]][self->cl_cols[j]];
         }
         for (int j = 0; j < nr; j++) {
-            row[nc + j] = i == j ? miss_cost(self, self->cl_rows[i]) : MVT_R(-1.0);
+            row[nc + j] = i == j ? miss_cost(self, k, self->cl_rows[i]) : MVT_R(-1.0);
         }
     }
     if (mvt_assoc_solve(self->cl_cost, nr, ncols, ncols, self->cl_assign, &self->assoc_ws) != MVT_OK) {
