@@ -162,6 +162,14 @@ static int32_t id_near(const mvt_real x[3])
     return best;
 }
 
+/* The confirmed tracks of the two people at X, which must be two. */
+static void two_ids(const mvt_real X[2][3], int32_t *id_a, int32_t *id_b)
+{
+    *id_a = id_near(X[0]);
+    *id_b = id_near(X[1]);
+    assert_true(*id_a > 0 && *id_b > 0 && *id_a != *id_b);
+}
+
 static void test_mvt_tracker_step_two_people_crossing_keep_identities(void **state)
 {
     (void)state;
@@ -175,9 +183,7 @@ static void test_mvt_tracker_step_two_people_crossing_keep_identities(void **sta
         frame_of(X, 2, 1000000 + f * 40000, &rng, 2.0, 0);
         assert_int_equal(mvt_tracker_step(&g_tracker, &g_frame, &g_out), MVT_OK);
         if (f == 20) {
-            id_a = id_near(X[0]);
-            id_b = id_near(X[1]);
-            assert_true(id_a > 0 && id_b > 0 && id_a != id_b);
+            two_ids(X, &id_a, &id_b);
         }
         if (f > 20) {
             assert_int_equal(id_near(X[0]), id_a);
@@ -204,9 +210,7 @@ static int coaster_takes(uint32_t seed, int *b_kept)
         frame_of(f < 40 ? X : X + 1, f < 40 ? 2 : 1, 1000000 + f * 40000, &rng, 2.0, 0);
         assert_int_equal(mvt_tracker_step(&g_tracker, &g_frame, &g_out), MVT_OK);
         if (f == 20) {
-            id_a = id_near(X[0]);
-            id_b = id_near(X[1]);
-            assert_true(id_a > 0 && id_b > 0 && id_a != id_b);
+            two_ids(X, &id_a, &id_b);
         }
         if (f > 20) {
             *b_kept &= id_near(X[1]) == id_b;
@@ -299,9 +303,7 @@ static void close_pair(int merged_blobs)
         }
         assert_int_equal(mvt_tracker_step(&g_tracker, &g_frame, &g_out), MVT_OK);
         if (f == 20) {
-            id_a = id_near(X[0]);
-            id_b = id_near(X[1]);
-            assert_true(id_a > 0 && id_b > 0 && id_a != id_b);
+            two_ids(X, &id_a, &id_b);
         }
         if (f >= 20 && (find_id(id_a) == NULL || find_id(id_b) == NULL)) {
             const mvt_counters_t *c = &g_tracker.counters;
