@@ -192,7 +192,6 @@ static void birth(mvt_pft_t *self, mvt_pft_target_t *t, const mvt_track_out_t *s
 static mvt_real column_top(const mvt_pft_t *self, const mvt_real xy[2], mvt_real fallback, int masks)
 {
     const mvt_pf_noise_t *q = &self->cfg.noise;
-    const uint8_t fg_level = (uint8_t)(((int)self->tab.d_floor + 255) / 2);
     const int need = masks > 1 ? (masks + 1) / 2 : 1;
     const mvt_real step = MVT_R(0.01);
     const int steps = (int)((q->z_max - q->z_min) / step);
@@ -200,13 +199,7 @@ static mvt_real column_top(const mvt_pft_t *self, const mvt_real xy[2], mvt_real
         const mvt_real xw[3] = {xy[0], xy[1], q->z_max - step * (mvt_real)j};
         int votes = 0;
         for (int k = 0; k < self->det.num_cameras; k++) {
-            const mvt_pf_image_t *img = &self->images[k];
-            mvt_real uv[2];
-            if (img->width < 1 || mvt_cam_project(&self->det.cams[k], xw, uv, NULL) != MVT_OK) {
-                continue;
-            }
-            const int idx = mvt_pf_image_index(img, uv[0], uv[1]);
-            votes += idx >= 0 && img->d[idx] > fg_level;
+            votes += mvt_pf_point_on_fg(&self->det.cams[k], &self->fovs[k], &self->images[k], &self->tab, xw) > 0;
         }
         if (votes >= need) {
             return xw[2];
@@ -215,15 +208,20 @@ static mvt_real column_top(const mvt_pft_t *self, const mvt_real xy[2], mvt_real
     return fallback;
 }
 
-/* a before b: stronger, then confirmed or coasting before tentative, then the older identity
- * (lower id: identities count up) */
-static int stronger(const mvt_pft_target_t *a, const mvt_pft_target_t *b)
+/* a (of strength sa) before b (of strength sb): stronger, then confirmed or coasting before
+ * tentative, then the older identity (lower id: identities count up) */
+static int goes_first(const mvt_pft_target_t *a, mvt_real sa, const mvt_pft_target_t *b, mvt_real sb)
 {
     const int ta = a->status == MVT_TRACK_TENTATIVE, tb = b->status == MVT_TRACK_TENTATIVE;
-    if (a->strength > b->strength || a->strength < b->strength) {
-        return a->strength > b->strength;
+    if (sa > sb || sa < sb) {
+        return sa > sb;
     }
     return ta != tb ? ta < tb : a->id < b->id;
+}
+
+static int stronger(const mvt_pft_target_t *a, const mvt_pft_target_t *b)
+{
+    return goes_first(a, a->strength, b, b->strength);
 }
 
 /* Strength with this frame's evidence folded in, before weighting: the share of the cameras that
@@ -270,15 +268,10 @@ static int rank_targets(mvt_pft_t *self, int sort, mvt_real dt)
     }
     for (int i = 1; i < n && sort; i++) {
         const int16_t cur = self->rank[i];
-        const mvt_pft_target_t *a = &self->targets[cur];
         int j = i - 1;
         for (; j >= 0; j--) { /* the weaker ones move right */
             const int16_t o = self->rank[j];
-            const mvt_pft_target_t *b = &self->targets[o];
-            const int ta = a->status == MVT_TRACK_TENTATIVE, tb = b->status == MVT_TRACK_TENTATIVE;
-            const int b_first = self->rank_key[o] > self->rank_key[cur] ||
-                                (!(self->rank_key[o] < self->rank_key[cur]) && (ta != tb ? tb < ta : b->id < a->id));
-            if (b_first) {
+            if (goes_first(&self->targets[o], self->rank_key[o], &self->targets[cur], self->rank_key[cur])) {
                 break;
             }
             self->rank[j + 1] = o;

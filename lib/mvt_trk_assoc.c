@@ -5,7 +5,7 @@
  * against every detection. Association: global nearest neighbour by the Hungarian method on each
  * cluster of tracks linked through shared gated detections, by likelihood (a detection costs
  * d^2 + ln |S| plus its colour's -2 ln LR; a "missed" column per track costs what p_detect and the
- * view's clutter density make of a miss, miss_cost), so one detection feeds at most one track and
+ * view's clutter density make of a miss, miss_base), so one detection feeds at most one track and
  * a track whose prediction is wide does not take a detection that a sharper one predicted. Merged blobs: tracks whose image
  * points are closer than merge_width_m seen at their depth are unresolved in this view. When the
  * Hungarian method gives a detection to one of them and leaves an unresolved neighbour without
@@ -55,8 +55,9 @@ static mvt_real app_cost(const mvt_tracker_t *self, int k, int t, int d)
  * 2 ln(p_detect / (1 - p_detect)) - 2 ln(2 pi lambda), shifted like app_cost. A track whose
  * prediction is uncertain (|S| large: coasting, hidden) spreads its likelihood thin, so it loses a
  * detection to a track that predicted it well, and takes one alone only nearer than the chi-square
- * gate (which still bounds every track). Never below 0. */
-static mvt_real miss_cost(const mvt_tracker_t *self, int k, int t)
+ * gate (which still bounds every track). Never below 0. The part every track of camera k shares,
+ * once per camera; each track's colour shift is taken off where it is used. */
+static mvt_real miss_base(const mvt_tracker_t *self, int k)
 {
     const mvt_tracker_config_t *c = &self->cfg;
     if (c->gate == MVT_GATE_PAPER) {
@@ -64,14 +65,13 @@ static mvt_real miss_cost(const mvt_tracker_t *self, int k, int t)
     }
     const mvt_real pd = c->p_detect;
     const mvt_real g = MVT_R(2.0) * (MVT_LOG(pd / (MVT_R(1.0) - pd)) - MVT_LOG(MVT_R(6.2831853) * self->ev_clutter[k]));
-    return (g > MVT_R(0.0) ? g : MVT_R(0.0)) - self->app_shift[t];
+    return g > MVT_R(0.0) ? g : MVT_R(0.0);
 }
 
-/* The spread part of a detection's cost, ln |S| (px^4), floored at 0 (|S| >= r^2 >= 1 px^4 with
- * any usable pixel noise, so the floor does not bind) to keep costs non-negative. */
-static mvt_real spread_cost(const mvt_pkf_innov_t *in)
+/* The spread part of a detection's cost, ln |S| (px^4) from det = |S|, floored at 0 (|S| >= r^2 >=
+ * 1 px^4 with any usable pixel noise, so the floor does not bind) to keep costs non-negative. */
+static mvt_real spread_cost(mvt_real det)
 {
-    const mvt_real det = in->S[0] * in->S[2] - in->S[1] * in->S[1];
     return det > MVT_R(1.0) ? MVT_LOG(det) : MVT_R(0.0);
 }
 
@@ -104,8 +104,7 @@ static mvt_real neg2_loglik(const mvt_tracker_t *self, int k, int t, int d)
     if (mvt_pkf_innovation_from(&self->pred[t], &self->meas[k][d], NULL, &in) != MVT_OK) {
         return MVT_R(1e30);
     }
-    const mvt_real det = in.S[0] * in.S[2] - in.S[1] * in.S[1];
-    return in.d2 + MVT_LOG(det);
+    return in.d2 + spread_cost(in.S[0] * in.S[2] - in.S[1] * in.S[1]);
 }
 
 /* The detection d given to u could as well be t's: the likelihoods differ by less than
@@ -247,8 +246,8 @@ static int hypothesise(mvt_tracker_t *self, const mvt_view_t *view, int k, const
                                 self->chroma_ok[k][d] = 0;
                             }
                         }
-                        cost = in.d2 + spread_cost(&in) + app_cost(self, k, t, d);
                         const mvt_real det = in.S[0] * in.S[2] - in.S[1] * in.S[1];
+                        cost = in.d2 + spread_cost(det) + app_cost(self, k, t, d);
                         if (tentative && det > MVT_R(0.0)) {
                             g += MVT_EXP(MVT_R(-0.5) * in.d2) / (MVT_R(6.2831853) * MVT_SQRT(det));
                         }
@@ -296,7 +295,8 @@ static int hypothesise(mvt_tracker_t *self, const mvt_view_t *view, int k, const
 }
 
 /* Solves one cluster (tracks with root r) with the Hungarian method. */
-static void solve_cluster(mvt_tracker_t *self, int k, int r, const int live[], int n_live, int assign[])
+static void solve_cluster(mvt_tracker_t *self, int k, int r, const int live[], int n_live, mvt_real miss,
+                          int assign[])
 {
     const int nd = self->num_meas[k];
     int nr = 0, nc = 0;
@@ -313,7 +313,7 @@ static void solve_cluster(mvt_tracker_t *self, int k, int r, const int live[], i
     }
     if (nr == 1 && nc == 1) {
         const int t = self->cl_rows[0], d = self->cl_cols[0];
-        if (self->cost[t][d] <= miss_cost(self, k, t)) {
+        if (self->cost[t][d] <= miss - self->app_shift[t]) {
             assign[t] = d;
         }
         return;
@@ -325,7 +325,7 @@ static void solve_cluster(mvt_tracker_t *self, int k, int r, const int live[], i
             row[j] = self->cost[self->cl_rows[i]][self->cl_cols[j]];
         }
         for (int j = 0; j < nr; j++) {
-            row[nc + j] = i == j ? miss_cost(self, k, self->cl_rows[i]) : MVT_R(-1.0);
+            row[nc + j] = i == j ? miss - self->app_shift[self->cl_rows[i]] : MVT_R(-1.0);
         }
     }
     if (mvt_assoc_solve(self->cl_cost, nr, ncols, ncols, self->cl_assign, &self->assoc_ws) != MVT_OK) {
@@ -420,10 +420,11 @@ void mvt_trk_associate(mvt_tracker_t *self, const mvt_view_t *view, int k, int a
             }
         }
     }
+    const mvt_real miss = miss_base(self, k);
     for (int i = 0; i < n_live; i++) {
         const int t = live[i];
         if (self->cluster[t] >= 0 && find_root(self->cluster, t) == t) {
-            solve_cluster(self, k, t, live, n_live, assign);
+            solve_cluster(self, k, t, live, n_live, miss, assign);
         }
     }
 

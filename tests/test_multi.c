@@ -221,7 +221,7 @@ static int coaster_takes(uint32_t seed, int *b_kept)
     return taken;
 }
 
-/* Association by likelihood (mvt_trk_assoc.c, miss_cost): a coasting track's wide prediction
+/* Association by likelihood (mvt_trk_assoc.c, miss_base): a coasting track's wide prediction
  * spreads its likelihood thin, so the track that predicted B's detections keeps them. With the sum
  * of squared Mahalanobis distances alone the coaster took 7 frames' detections over the 8 seeds
  * (in 7 of them: it is nearer in its own wide metric); by likelihood 1 (seed 7, frame 83: one
