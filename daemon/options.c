@@ -83,6 +83,11 @@ static void usage(FILE *f)
             "                      acceleration m^2/s^3; LEAVE: rate 1/s. Default\n"
             "                      still:2.5e-5:2.5e-5:0.2;cv/still:0.3:4e-4:0.3;\n"
             "                      cv:3:0.1:1.5;still/cv:2.5e-5:1:1.3\n"
+            "  --outlier-persist S imm: a camera's displaced detection (an occluding or merged blob)\n"
+            "                      stays displaced S seconds on average, by about the same offset;\n"
+            "                      a view whose detections keep that offset is discounted while\n"
+            "                      two other views place the person (default 0.5; 0: each frame's\n"
+            "                      detection is judged on its own)\n"
             "  --q QX,QY,QZ        cv: white-acceleration density m^2/s^3 per axis (default\n"
             "                      0.5,0.5,0.05; tools/mvtrack learn-q estimates it); implies cv\n"
             "  --sigma-px X        pixel noise for cameras without sigma_px in the rig (default 2)\n"
@@ -274,13 +279,15 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
         {"particle-model", required_argument, 0, 'B'}, {"state", required_argument, 0, 'T'},
         {"motion", required_argument, 0, 'N'},   {"motion-models", required_argument, 0, 'W'},
         {"pixels", required_argument, 0, 'x'},   {"recover", required_argument, 0, 'R'},
+        {"outlier-persist", required_argument, 0, 'L'},
         {0, 0, 0, 0}};
     int opt;
     optind = 1; /* callable more than once (tests, fuzzer) */
     long particles = MVT_MAX_PARTICLES, seed = 1, publish_particles = 0;
     double exclusion_m = -1.0; /* mode-dependent default */
     double recover_s = -1.0;   /* the library's default */
-    while ((opt = getopt_long(argc, argv, "r:i:o:m:g:c:q:s:d:M:O:vhP:X:S:Q:B:T:N:W:x:R:", opts, NULL)) != -1) {
+    double persist_s = -1.0;   /* the library's default */
+    while ((opt = getopt_long(argc, argv, "r:i:o:m:g:c:q:s:d:M:O:vhP:X:S:Q:B:T:N:W:x:R:L:", opts, NULL)) != -1) {
         switch (opt) {
         case 'r': rig_path = optarg; break;
         case 'i': in_url = optarg; break;
@@ -338,6 +345,11 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
             break;
         case 'R':
             if (option_range("--recover", optarg, 0.0, 3600.0, "seconds", &recover_s) != 0) {
+                return 2;
+            }
+            break;
+        case 'L':
+            if (option_range("--outlier-persist", optarg, 0.0, 60.0, "seconds", &persist_s) != 0) {
                 return 2;
             }
             break;
@@ -402,6 +414,9 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
         fprintf(stderr, "mvtrackd: --motion-models needs up to %d models KIND:QXY:QZ:LEAVE separated by ';' "
                         "(KIND still, cv or XY/Z such as cv/still, q > 0, leave rate >= 0 per second), got '%s'\n", MVT_IMM_MODELS, models);
         return 2;
+    }
+    if (persist_s >= 0.0) {
+        cfg.motion.outlier_persist_s = (mvt_real)persist_s;
     }
     d->mode_name = mode;
 

@@ -22,6 +22,8 @@ void mvt_imm_config_default(mvt_imm_config_t *c)
     c->n = MVT_IMM_MODELS < BANK ? MVT_IMM_MODELS : BANK;
     c->p_outlier = MVT_R(0.1);
     c->outlier_radius_px = MVT_R(150.0);
+    c->outlier_persist_s = MVT_R(0.5);
+    c->outlier_drift_px2_s = MVT_R(400.0);
     for (int j = 0; j < c->n; j++) {
         c->model[j] = bank[j];
     }
@@ -61,7 +63,9 @@ mvt_err_t mvt_imm_config_check(const mvt_imm_config_t *c)
         }
     }
     if (!(c->p_outlier >= MVT_R(0.0) && c->p_outlier < MVT_R(1.0)) ||
-        !(c->outlier_radius_px > MVT_R(0.0)) || !isfinite(c->outlier_radius_px)) {
+        !(c->outlier_radius_px > MVT_R(0.0)) || !isfinite(c->outlier_radius_px) ||
+        !(c->outlier_persist_s >= MVT_R(0.0)) || !isfinite(c->outlier_persist_s) ||
+        !(c->outlier_drift_px2_s >= MVT_R(0.0)) || !isfinite(c->outlier_drift_px2_s)) {
         return MVT_ERR_INVALID;
     }
     return MVT_OK;
@@ -524,8 +528,43 @@ static void apply(mvt_cv_state_t *mj, int m, const imm_upd_t *u, mvt_real w)
 MVT_IMM_PIXEL_UPDATE(px6, 6)
 MVT_IMM_PIXEL_UPDATE(px3, 3)
 
+/* The density of y under "the view's last displacement continues": N(y - view->y; 0, S_c) with
+ * S_c = H P H^T + 2 noise + drift dt I (the combined estimate's spread, this detection's noise and
+ * the last one's, the displacement's wander), times the prior probability of continuing. 0 when
+ * nothing is known or persistence is off. */
+static mvt_real continuing(const mvt_imm_config_t *c, const mvt_real *H, const mvt_real *y, const mvt_real *noise,
+                           const mvt_imm_view_t *view, const mvt_cv_state_t *s, mvt_real *prior)
+{
+    *prior = MVT_R(0.0);
+    if (view == NULL || !(c->outlier_persist_s > MVT_R(0.0)) || !(view->p > MVT_R(0.0)) ||
+        s->utime_us < view->utime_us) {
+        return MVT_R(0.0);
+    }
+    const mvt_real dt = (mvt_real)(s->utime_us - view->utime_us) * MVT_R(1e-6);
+    *prior = view->p * MVT_EXP(-dt / c->outlier_persist_s);
+    const mvt_real *P = s->P;
+    mvt_real hp[2][3];
+    for (int a = 0; a < 2; a++) {
+        for (int b = 0; b < 3; b++) {
+            hp[a][b] = H[a * 3] * P[b] + H[a * 3 + 1] * P[6 + b] + H[a * 3 + 2] * P[12 + b];
+        }
+    }
+    const mvt_real drift = c->outlier_drift_px2_s * dt;
+    const mvt_real s00 = hp[0][0] * H[0] + hp[0][1] * H[1] + hp[0][2] * H[2] + MVT_R(2.0) * noise[0] + drift;
+    const mvt_real s01 = hp[0][0] * H[3] + hp[0][1] * H[4] + hp[0][2] * H[5] + (noise[1] + noise[2]);
+    const mvt_real s11 = hp[1][0] * H[3] + hp[1][1] * H[4] + hp[1][2] * H[5] + MVT_R(2.0) * noise[3] + drift;
+    const mvt_real det = s00 * s11 - s01 * s01;
+    if (!(det > MVT_R(0.0)) || !isfinite(det)) {
+        *prior = MVT_R(0.0);
+        return MVT_R(0.0);
+    }
+    const mvt_real e0 = y[0] - view->y[0], e1 = y[1] - view->y[1];
+    const mvt_real d2 = (s11 * e0 * e0 - MVT_R(2.0) * s01 * e0 * e1 + s00 * e1 * e1) / det;
+    return MVT_EXP(MVT_R(-0.5) * d2) / (MVT_R(6.283185307179586) * MVT_SQRT(det));
+}
+
 static mvt_err_t update(mvt_imm_t *imm, const mvt_imm_config_t *c, int m, const mvt_real *H, const mvt_real *y,
-                        const mvt_real *noise, mvt_cv_state_t *s, int nb)
+                        const mvt_real *noise, mvt_cv_state_t *s, int nb, mvt_imm_view_t *view)
 {
     MVT_ASSERT(m == 2 || m == 3);
     const int n = c->n;
@@ -546,16 +585,29 @@ static mvt_err_t update(mvt_imm_t *imm, const mvt_imm_config_t *c, int m, const 
     /* a pixel detection is the person's with probability 1 - p_outlier, else displaced anywhere
      * within outlier_radius_px (density 1 / (pi r^2)) */
     const mvt_real eps = m == 2 ? c->p_outlier : MVT_R(0.0);
-    const mvt_real clutter = eps > MVT_R(0.0)
-                                 ? eps / (MVT_R(3.14159265358979) * c->outlier_radius_px * c->outlier_radius_px)
-                                 : MVT_R(0.0);
+    /* ... or, with the view's memory, displaced as in its last detection (continuing) */
+    mvt_real p_cont = MVT_R(0.0);
+    const mvt_real g_cont = eps > MVT_R(0.0) ? continuing(c, H, y, noise, view, s, &p_cont) : MVT_R(0.0);
+    const mvt_real right = (MVT_R(1.0) - eps) * (MVT_R(1.0) - p_cont);
+    const mvt_real clutter =
+        eps > MVT_R(0.0)
+            ? eps * (MVT_R(1.0) - p_cont) / (MVT_R(3.14159265358979) * c->outlier_radius_px * c->outlier_radius_px) +
+                  p_cont * g_cont
+            : MVT_R(0.0);
     mvt_real like[MVT_IMM_MODELS], sum = MVT_R(0.0);
     for (int j = 0; j < n; j++) {
-        like[j] = (MVT_R(1.0) - eps) * u[j].g + clutter;
+        like[j] = right * u[j].g + clutter;
         sum += imm->mu[j] * like[j];
     }
+    if (view != NULL && eps > MVT_R(0.0)) {
+        const mvt_real pd = sum > MVT_R(0.0) && isfinite(sum) ? clutter / sum : MVT_R(1.0);
+        view->p = pd < MVT_R(1.0) ? pd : MVT_R(1.0);
+        view->y[0] = y[0];
+        view->y[1] = y[1];
+        view->utime_us = s->utime_us;
+    }
     for (int j = 0; j < n; j++) {
-        const mvt_real w = like[j] > MVT_R(0.0) ? (MVT_R(1.0) - eps) * u[j].g / like[j] : MVT_R(0.0);
+        const mvt_real w = like[j] > MVT_R(0.0) ? right * u[j].g / like[j] : MVT_R(0.0);
         const mvt_real wj = eps > MVT_R(0.0) ? w : MVT_R(1.0);
         if (m != 2) {
             apply(&imm->m[j], m, &u[j], wj);
@@ -579,13 +631,19 @@ static mvt_err_t update(mvt_imm_t *imm, const mvt_imm_config_t *c, int m, const 
 mvt_err_t mvt_imm_update(mvt_imm_t *imm, const mvt_imm_config_t *c, int m, const mvt_real *H, const mvt_real *y,
                          const mvt_real *noise, mvt_cv_state_t *s)
 {
-    return update(imm, c, m, H, y, noise, s, 6);
+    return update(imm, c, m, H, y, noise, s, 6, NULL);
 }
 
 mvt_err_t mvt_imm_update_pos(mvt_imm_t *imm, const mvt_imm_config_t *c, int m, const mvt_real *H, const mvt_real *y,
                              const mvt_real *noise, mvt_cv_state_t *s)
 {
-    return update(imm, c, m, H, y, noise, s, 3);
+    return update(imm, c, m, H, y, noise, s, 3, NULL);
+}
+
+mvt_err_t mvt_imm_update_view(mvt_imm_t *imm, const mvt_imm_config_t *c, const mvt_real *H, const mvt_real *y,
+                              const mvt_real *noise, mvt_imm_view_t *view, mvt_cv_state_t *s)
+{
+    return update(imm, c, 2, H, y, noise, s, 3, view);
 }
 
 static mvt_err_t truncate_models(mvt_imm_t *imm, const mvt_imm_config_t *c, const mvt_real H[3], mvt_real value,

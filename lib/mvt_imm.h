@@ -33,7 +33,9 @@
  * with weight w_j = P(right | y_j) (the PDA filter's one-measurement form: x += w K y,
  * P = P - w K S K^T + w (1 - w) (K y)(K y)^T). A far detection then moves the estimate little and
  * is no evidence of a manoeuvre (without this, the manoeuvre model explains a wrong blob, widens
- * the gate and takes the next one).
+ * the gate and takes the next one). A displacement also lasts: mvt_imm_update_view remembers, per
+ * camera, whether the last detection was displaced and by how much, and lets that displacement
+ * continue (outlier_persist_s, outlier_drift_px2_s).
  *
  * Every measurement in the tracker is linearised at the combined estimate (one projection per
  * camera and track): model j's innovation is y_j = y - H (x_j - x) and its covariance
@@ -81,7 +83,21 @@ typedef struct mvt_imm_config {
                                              segmentation), in [0, 1); default 0.1 */
     mvt_real outlier_radius_px;           /* ... and then lies anywhere within this radius of the
                                              head, pixels, > 0; default 150 */
+    mvt_real outlier_persist_s;           /* a displacement lasts this long on average (a merged
+                                             blob's top stays while two people overlap), s, >= 0;
+                                             0: every frame's detection is displaced or not
+                                             independently of the last one's */
+    mvt_real outlier_drift_px2_s;         /* ... and wanders meanwhile as a random walk of this
+                                             diffusion, px^2/s, >= 0 */
 } mvt_imm_config_t;
+
+/* What a view's last detection of a track said about displacement (mvt_imm_update_view): the
+ * probability that it was displaced and by how much. Zeroed: nothing known. */
+typedef struct mvt_imm_view {
+    mvt_real p;       /* P(displaced | that detection), [0, 1] */
+    mvt_real y[2];    /* its offset from the predicted head, px */
+    int64_t utime_us; /* its time */
+} mvt_imm_view_t;
 
 typedef struct mvt_imm {
     mvt_cv_state_t m[MVT_IMM_MODELS]; /* each model's estimate */
@@ -130,6 +146,17 @@ mvt_err_t mvt_imm_predict_to(mvt_imm_t *imm, const mvt_imm_config_t *c, int64_t 
  * recombined. MVT_ERR_NUMERIC (nothing changed) when some S_j is not positive definite. */
 mvt_err_t mvt_imm_update(mvt_imm_t *imm, const mvt_imm_config_t *c, int m, const mvt_real *H, const mvt_real *y,
                          const mvt_real *noise, mvt_cv_state_t *s);
+
+/* mvt_imm_update_pos for a pixel measurement (m = 2) of the view whose memory is *view (updated).
+ * A displaced detection tends to stay displaced by about the same offset for a while (an occluding
+ * blob, a merged blob's top): with probability view->p exp(-dt / outlier_persist_s) the last
+ * displacement continues, and the detection then lies at view->y from the predicted head, spread
+ * by this frame's S, the noise of both detections and the drift over dt; otherwise the detection is
+ * displaced anew with p_outlier or is the person's. Every model is updated with the probability
+ * that the detection is the person's; *view receives the probability that it was displaced, its
+ * offset y and s->utime_us. With outlier_persist_s 0 or p_outlier 0 it is mvt_imm_update_pos. */
+mvt_err_t mvt_imm_update_view(mvt_imm_t *imm, const mvt_imm_config_t *c, const mvt_real *H, const mvt_real *y,
+                              const mvt_real *noise, mvt_imm_view_t *view, mvt_cv_state_t *s);
 
 /* mvt_imm_predict_to and mvt_imm_update for several cameras in a row: s receives only what projecting
  * and gating the next camera read, the combined position and the position block of P (the velocity

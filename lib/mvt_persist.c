@@ -21,6 +21,7 @@
 #define MVT_PERSIST_SLACK_M MVT_R(10.0)
 #define MVT_PERSIST_MAX_SPEED MVT_R(100.0)
 #define MVT_PERSIST_MAX_VAR MVT_R(1e6)
+#define MVT_PERSIST_MAX_PX MVT_R(1e6)
 
 static int status_ok(int32_t s)
 {
@@ -145,6 +146,20 @@ static int seen_height_ok(const mvt_tracker_config_t *c, const mvt_track_t *tr)
            tr->seen_zz >= MVT_R(0.0) && tr->seen_zz <= MVT_PERSIST_MAX_VAR;
 }
 
+/* Each camera's memory of displacement (mvt_imm_view_t): a probability, a finite offset no larger
+ * than a picture could hold, a time no later than the state's. */
+static int views_ok(const mvt_track_t *tr, int64_t now)
+{
+    for (int k = 0; k < MVT_MAX_CAMERAS; k++) {
+        const mvt_imm_view_t *v = &tr->view[k];
+        if (!(v->p >= MVT_R(0.0) && v->p <= MVT_R(1.0)) || !(MVT_FABS(v->y[0]) <= MVT_PERSIST_MAX_PX) ||
+            !(MVT_FABS(v->y[1]) <= MVT_PERSIST_MAX_PX) || !time_ok(v->utime_us, now)) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
 static int tracker_state_ok(const mvt_tracker_config_t *c, const mvt_tracker_persist_t *p)
 {
     if (p->next_id <= 0 || (p->have_time != 0 && p->have_time != 1) || p->last_utime_us < 0 ||
@@ -165,7 +180,7 @@ static int tracker_state_ok(const mvt_tracker_config_t *c, const mvt_tracker_per
             !time_ok(tr->last_update_us, now) || !time_ok(tr->last_explained_us, now) ||
             !time_ok(tr->last_consistent_us, now) || !time_ok(tr->last_needed_us, now) || tr->misses < 0 ||
             !bank_ok(c, tr) || !lost_ok(c, &tr->held, now) || !isfinite(tr->exist_llr) ||
-            !isfinite(tr->need_llr) || !seen_height_ok(c, tr) || !mvt_trk_app_ok(&tr->app) ||
+            !isfinite(tr->need_llr) || !seen_height_ok(c, tr) || !mvt_trk_app_ok(&tr->app) || !views_ok(tr, now) ||
             (tr->held.id != 0 && (tr->held.id != tr->id || tr->status != MVT_TRACK_TENTATIVE))) {
             return 0;
         }

@@ -168,10 +168,13 @@ static void step_projective(mvt_tracker_t *self, const mvt_frame_t *frame, const
             const mvt_real *extra = self->merge_wide[t] ? self->merge_cov[t] : NULL;
             mvt_err_t err = mvt_pkf_innovation_from(&self->pred[t], &self->meas[k][assign[t]], extra, &in);
             if (err == MVT_OK) {
-                err = mvt_trk_update_pkf(self, tr, &in, extra);
+                err = mvt_trk_update_pkf(self, tr, k, &in, extra);
             }
             if (err == MVT_OK) {
                 tr->cameras_used |= 1u << k;
+                if (tr->view[k].p < MVT_R(0.5)) {
+                    tr->cameras_placed |= 1u << k;
+                }
                 self->counters.updates++;
                 self->counters.merged_updates += merged[t];
                 if (self->chroma_ok[k][assign[t]] && self->merge_nb[t] < 0 && !merged[t]) {
@@ -323,6 +326,8 @@ mvt_err_t mvt_tracker_step(mvt_tracker_t *self, const mvt_frame_t *frame, mvt_ou
     }
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         self->tracks[t].cameras_used = 0u;
+        self->tracks[t].cameras_placed_prev = self->tracks[t].cameras_placed;
+        self->tracks[t].cameras_placed = 0u;
         self->tracks[t].cameras_occluded = 0u;
         self->tracks[t].need_llr *= forget;
         self->tracks[t].cameras_uncovered = 0u;

@@ -300,6 +300,11 @@ typedef struct mvt_track {
     mvt_lost_t held;            /* tentative track born with a lost identity (held.id == id): the
                                    record it took, given back if the track dies tentative */
     mvt_app_t app;              /* its appearance (blobs with colour only) */
+    uint32_t cameras_placed;      /* this frame: cameras whose detection updated the track as
+                                     the person's (not judged displaced) */
+    uint32_t cameras_placed_prev; /* ... the frame before */
+    mvt_imm_view_t view[MVT_MAX_CAMERAS]; /* per camera: was its last detection displaced, and by
+                                             how much (mvt_imm_update_view) */
 } mvt_track_t;
 
 /* Multi-view birth candidates examined per frame (the best are kept; the excess is counted). */

@@ -200,7 +200,8 @@ void mvt_trk_predict(mvt_tracker_t *self, mvt_track_t *tr, int64_t utime_us);
  * velocity's covariance in tr->s is stale until mvt_trk_settle; the single filter is always whole).
  * in: the innovation against tr->s (mvt_pkf_innovation_from); extra_px2 as given to it (or NULL). */
 void mvt_trk_predict_pos(mvt_tracker_t *self, mvt_track_t *tr, int64_t utime_us);
-mvt_err_t mvt_trk_update_pkf(mvt_tracker_t *self, mvt_track_t *tr, const mvt_pkf_innov_t *in, const mvt_real *extra_px2);
+mvt_err_t mvt_trk_update_pkf(mvt_tracker_t *self, mvt_track_t *tr, int k, const mvt_pkf_innov_t *in,
+                             const mvt_real *extra_px2);
 void mvt_trk_settle(mvt_tracker_t *self, mvt_track_t *tr);
 mvt_err_t mvt_trk_update_point(mvt_tracker_t *self, mvt_track_t *tr, const mvt_real z[3], const mvt_real R[9]);
 mvt_err_t mvt_trk_truncate(mvt_tracker_t *self, mvt_track_t *tr, const mvt_real H[3], mvt_real value, mvt_real lo,

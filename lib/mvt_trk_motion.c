@@ -60,7 +60,8 @@ void mvt_trk_predicted(const mvt_tracker_t *self, const mvt_track_t *tr, int64_t
     }
 }
 
-mvt_err_t mvt_trk_update_pkf(mvt_tracker_t *self, mvt_track_t *tr, const mvt_pkf_innov_t *in, const mvt_real *extra_px2)
+mvt_err_t mvt_trk_update_pkf(mvt_tracker_t *self, mvt_track_t *tr, int k, const mvt_pkf_innov_t *in,
+                             const mvt_real *extra_px2)
 {
     if (single(self)) {
         return mvt_pkf_update(&tr->s, in);
@@ -68,7 +69,15 @@ mvt_err_t mvt_trk_update_pkf(mvt_tracker_t *self, mvt_track_t *tr, const mvt_pkf
     const mvt_real e[3] = {extra_px2 != NULL ? extra_px2[0] : MVT_R(0.0), extra_px2 != NULL ? extra_px2[1] : MVT_R(0.0),
                            extra_px2 != NULL ? extra_px2[2] : MVT_R(0.0)};
     const mvt_real noise[4] = {in->r + e[0], e[1], e[1], in->r + e[2]};
-    return mvt_imm_update_pos(&tr->imm, &self->cfg.motion, 2, in->H, in->y, noise, &tr->s);
+    /* A view's detection may be judged displaced as its last one was only while two other views
+     * place the person (this frame or the one before): with fewer, the track's own error looks
+     * like a lasting displacement (one view leaves the depth free), and the track would stop
+     * following its person. Measured in docs/filters.md (Lasting displacements). */
+    const uint32_t others = (tr->cameras_placed | tr->cameras_placed_prev) & ~(1u << k);
+    if (mvt_trk_popcount(others) < 2) {
+        tr->view[k].p = MVT_R(0.0);
+    }
+    return mvt_imm_update_view(&tr->imm, &self->cfg.motion, in->H, in->y, noise, &tr->view[k], &tr->s);
 }
 
 mvt_err_t mvt_trk_update_point(mvt_tracker_t *self, mvt_track_t *tr, const mvt_real z[3], const mvt_real R[9])

@@ -395,7 +395,7 @@ static void test_mvt_tracker_resume_continues_and_refuses_bad_state(void **state
                              .until_us = g_saved.last_utime_us + 2000000, .x = {3, 2, 1.7f},
                              .P = {0.01f, 0, 0, 0, 0.01f, 0, 0, 0, 0.001f},
                              .app = {.m = {0.3f, -0.2f}, .var = 0.01f, .n = 40}};
-    for (int c = 0; c < 19; c++) {
+    for (int c = 0; c < 22; c++) {
         mvt_tracker_save(&g_tracker2, &g_saved);
         g_bad = g_saved;
         mvt_track_t *tr = &g_bad.tracks[live];
@@ -417,6 +417,9 @@ static void test_mvt_tracker_resume_continues_and_refuses_bad_state(void **state
         case 16: tr->app.m[0] = NAN; break;                      /* a colour that is no number, */
         case 17: tr->app.m[1] = 1.5f; break;                     /* outside the chroma disc, */
         case 18: g_bad.lost[3].app.var = 0; break;               /* a record's spread of 0 */
+        case 19: tr->view[2].p = 1.5f; break;                    /* a view's displacement: no probability, */
+        case 20: tr->view[1].y[0] = INFINITY; break;             /* an infinite offset, */
+        case 21: tr->view[0].utime_us = g_bad.last_utime_us + 1; break; /* a time after the clock */
         case 0: tr->s.x[1] = NAN; break;
         case 1: tr->s.P[7] = -1.0f; break;                       /* variance of y negative */
         case 2: tr->s.P[1] = 5.0f; break;                        /* not symmetric */
@@ -512,6 +515,15 @@ static void test_mvt_tracker_init_bad_config_rejected(void **state)
     assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 0), MVT_ERR_INVALID);
     assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, MVT_MAX_CAMERAS + 1), MVT_ERR_INVALID);
     cfg.motion.model[0].q[1] = -1;
+    assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 5), MVT_ERR_INVALID);
+    mvt_tracker_config_default(&cfg);
+    cfg.motion.outlier_persist_s = -0.1f; /* a displacement's duration and drift: >= 0, finite */
+    assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 5), MVT_ERR_INVALID);
+    mvt_tracker_config_default(&cfg);
+    cfg.motion.outlier_drift_px2_s = NAN;
+    assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 5), MVT_ERR_INVALID);
+    mvt_tracker_config_default(&cfg);
+    cfg.motion.outlier_persist_s = INFINITY;
     assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 5), MVT_ERR_INVALID);
     mvt_tracker_config_default(&cfg);
     cfg.confirm_hits = 9;
