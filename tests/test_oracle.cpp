@@ -438,6 +438,30 @@ struct OracleImm {
     }
 };
 
+/* The IMM tests' start: a head at (2.5, 2.0, 1.7) m, 0.1 m std per axis, 0.25 m/s velocity std. */
+static void imm_start(const mvt_imm_config_t &cfg, mvt_cv_state_t &s, mvt_imm_t &imm)
+{
+    const mvt_real p0[3] = {2.5f, 2.0f, 1.7f}, cov[9] = {0.01f, 0, 0, 0, 0.01f, 0, 0, 0, 0.01f};
+    mvt_cv_init(&s, p0, cov, 0.25f, 0);
+    mvt_imm_init(&imm, &cfg, &s);
+}
+
+/* The textbook IMM started where the core's bank is. */
+static OracleImm oracle_imm_of(const mvt_imm_config_t &cfg, const mvt_imm_t &imm, const mvt_cv_state_t &s)
+{
+    OracleImm o;
+    o.n = cfg.n;
+    o.cfg = cfg;
+    for (int j = 0; j < cfg.n; j++) {
+        o.mu[j] = imm.mu[j];
+        for (int a = 0; a < 6; a++) {
+            o.x[j](a) = s.x[a];
+            for (int b = 0; b < 6; b++) o.P[j](a, b) = s.P[a * 6 + b];
+        }
+    }
+    return o;
+}
+
 static void test_mvt_imm_matches_eigen_textbook_imm(void **state)
 {
     (void)state;
@@ -451,10 +475,8 @@ static void test_mvt_imm_matches_eigen_textbook_imm(void **state)
     mvt_imm_config_default(&cfg);
     if (!robust) cfg.p_outlier = 0; /* Gaussian measurements: the textbook IMM */
     mvt_cv_state_t s;
-    const mvt_real p0[3] = {2.5f, 2.0f, 1.7f}, cov[9] = {0.01f, 0, 0, 0, 0.01f, 0, 0, 0, 0.01f};
-    mvt_cv_init(&s, p0, cov, 0.25f, 0);
     mvt_imm_t imm;
-    mvt_imm_init(&imm, &cfg, &s);
+    imm_start(cfg, s, imm);
     /* the tracker's path: between cameras only the position part of the combination, whole once
      * per frame; it must give the same estimate */
     mvt_imm_t imm2 = imm;
@@ -471,16 +493,7 @@ static void test_mvt_imm_matches_eigen_textbook_imm(void **state)
             for (int b = 0; b < 3; b++) assert_true(close(s2.P[a * 6 + b], s.P[a * 6 + b]));
         }
     };
-    OracleImm o;
-    o.n = cfg.n;
-    o.cfg = cfg;
-    for (int j = 0; j < cfg.n; j++) {
-        o.mu[j] = imm.mu[j];
-        for (int a = 0; a < 6; a++) {
-            o.x[j](a) = s.x[a];
-            for (int b = 0; b < 6; b++) o.P[j](a, b) = s.P[a * 6 + b];
-        }
-    }
+    OracleImm o = oracle_imm_of(cfg, imm, s);
     /* stands 2 s, walks east at 1 m/s, turns north sharply at 4 s, stops at 6 s, sits down at 8 s
      * (the head drops 0.48 m in 0.8 s) and stays seated */
     Eigen::Vector3d truth(2.5, 2.0, 1.7);
@@ -570,23 +583,12 @@ static void test_mvt_imm_view_memory_matches_eigen(void **state)
     mvt_imm_config_default(&cfg);
     assert_true(cfg.outlier_persist_s > 0);
     mvt_cv_state_t s;
-    const mvt_real p0[3] = {2.5f, 2.0f, 1.7f}, cov[9] = {0.01f, 0, 0, 0, 0.01f, 0, 0, 0, 0.01f};
-    mvt_cv_init(&s, p0, cov, 0.25f, 0);
     mvt_imm_t imm;
-    mvt_imm_init(&imm, &cfg, &s);
+    imm_start(cfg, s, imm);
     mvt_imm_view_t view[5];
     memset(view, 0, sizeof(view));
-    OracleImm o;
-    o.n = cfg.n;
-    o.cfg = cfg;
+    OracleImm o = oracle_imm_of(cfg, imm, s);
     OracleImm::View ov[5];
-    for (int j = 0; j < cfg.n; j++) {
-        o.mu[j] = imm.mu[j];
-        for (int a = 0; a < 6; a++) {
-            o.x[j](a) = s.x[a];
-            for (int b = 0; b < 6; b++) o.P[j](a, b) = s.P[a * 6 + b];
-        }
-    }
     Eigen::Vector3d truth(2.5, 2.0, 1.7);
     double worst = 0, worst_p = 0, p_burst = 0, p_clean = 0;
     int n_burst = 0, n_clean = 0;
@@ -656,10 +658,8 @@ static double burst_error(mvt_real persist_s, unsigned seed)
     mvt_imm_config_default(&cfg);
     cfg.outlier_persist_s = persist_s;
     mvt_cv_state_t s;
-    const mvt_real p0[3] = {2.5f, 2.0f, 1.7f}, cov[9] = {0.01f, 0, 0, 0, 0.01f, 0, 0, 0, 0.01f};
-    mvt_cv_init(&s, p0, cov, 0.25f, 0);
     mvt_imm_t imm;
-    mvt_imm_init(&imm, &cfg, &s);
+    imm_start(cfg, s, imm);
     mvt_imm_view_t view[5];
     memset(view, 0, sizeof(view));
     Eigen::Vector3d truth(2.5, 2.0, 1.7);
