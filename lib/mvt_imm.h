@@ -151,8 +151,8 @@ mvt_err_t mvt_imm_update(mvt_imm_t *imm, const mvt_imm_config_t *c, int m, const
  * A displaced detection tends to stay displaced by about the same offset for a while (an occluding
  * blob, a merged blob's top): with probability view->p exp(-dt / outlier_persist_s) the last
  * displacement continues, and the detection then lies at view->y from the predicted head, spread
- * by this frame's S, the noise of both detections and the drift over dt; otherwise the detection is
- * displaced anew with p_outlier or is the person's. Every model is updated with the probability
+ * by the prediction's H P H^T, the noise of both detections (2 R) and the drift over dt; otherwise
+ * the detection is displaced anew with p_outlier or is the person's. Every model is updated with the probability
  * that the detection is the person's; *view receives the probability that it was displaced, its
  * offset y and s->utime_us. With outlier_persist_s 0 or p_outlier 0 it is mvt_imm_update_pos. */
 mvt_err_t mvt_imm_update_view(mvt_imm_t *imm, const mvt_imm_config_t *c, const mvt_real *H, const mvt_real *y,
