@@ -529,10 +529,11 @@ MVT_IMM_PIXEL_UPDATE(px6, 6)
 MVT_IMM_PIXEL_UPDATE(px3, 3)
 
 /* The density of y under "the view's last displacement continues": N(y - view->y; 0, S_c) with
- * S_c = H P H^T + 2 noise + drift dt I (the combined estimate's spread, this detection's noise and
- * the last one's, the displacement's wander), times the prior probability of continuing. 0 when
- * nothing is known or persistence is off. */
-static mvt_real continuing(const mvt_imm_config_t *c, const mvt_real *H, const mvt_real *y, const mvt_real *noise,
+ * S_c = S + noise + drift dt I, S the combined estimate's innovation covariance H P H^T + noise (the
+ * estimate's spread and this detection's noise), plus the last detection's noise and the
+ * displacement's wander; times the prior probability of continuing. 0 when nothing is known or
+ * persistence is off. */
+static mvt_real continuing(const mvt_imm_config_t *c, const mvt_real *y, const mvt_real *noise, const mvt_real S[3],
                            const mvt_imm_view_t *view, const mvt_cv_state_t *s, mvt_real *prior)
 {
     *prior = MVT_R(0.0);
@@ -542,17 +543,10 @@ static mvt_real continuing(const mvt_imm_config_t *c, const mvt_real *H, const m
     }
     const mvt_real dt = (mvt_real)(s->utime_us - view->utime_us) * MVT_R(1e-6);
     *prior = view->p * MVT_EXP(-dt / c->outlier_persist_s);
-    const mvt_real *P = s->P;
-    mvt_real hp[2][3];
-    for (int a = 0; a < 2; a++) {
-        for (int b = 0; b < 3; b++) {
-            hp[a][b] = H[a * 3] * P[b] + H[a * 3 + 1] * P[6 + b] + H[a * 3 + 2] * P[12 + b];
-        }
-    }
     const mvt_real drift = c->outlier_drift_px2_s * dt;
-    const mvt_real s00 = hp[0][0] * H[0] + hp[0][1] * H[1] + hp[0][2] * H[2] + MVT_R(2.0) * noise[0] + drift;
-    const mvt_real s01 = hp[0][0] * H[3] + hp[0][1] * H[4] + hp[0][2] * H[5] + (noise[1] + noise[2]);
-    const mvt_real s11 = hp[1][0] * H[3] + hp[1][1] * H[4] + hp[1][2] * H[5] + MVT_R(2.0) * noise[3] + drift;
+    const mvt_real s00 = S[0] + noise[0] + drift;
+    const mvt_real s01 = S[1] + MVT_R(0.5) * (noise[1] + noise[2]);
+    const mvt_real s11 = S[2] + noise[3] + drift;
     const mvt_real det = s00 * s11 - s01 * s01;
     if (!(det > MVT_R(0.0)) || !isfinite(det)) {
         *prior = MVT_R(0.0);
@@ -564,7 +558,8 @@ static mvt_real continuing(const mvt_imm_config_t *c, const mvt_real *H, const m
 }
 
 static mvt_err_t update(mvt_imm_t *imm, const mvt_imm_config_t *c, int m, const mvt_real *H, const mvt_real *y,
-                        const mvt_real *noise, mvt_cv_state_t *s, int nb, mvt_imm_view_t *view)
+                        const mvt_real *noise, mvt_cv_state_t *s, int nb, const mvt_real *S_view,
+                        mvt_imm_view_t *view)
 {
     MVT_ASSERT(m == 2 || m == 3);
     const int n = c->n;
@@ -587,7 +582,7 @@ static mvt_err_t update(mvt_imm_t *imm, const mvt_imm_config_t *c, int m, const 
     const mvt_real eps = m == 2 ? c->p_outlier : MVT_R(0.0);
     /* ... or, with the view's memory, displaced as in its last detection (continuing) */
     mvt_real p_cont = MVT_R(0.0);
-    const mvt_real g_cont = eps > MVT_R(0.0) ? continuing(c, H, y, noise, view, s, &p_cont) : MVT_R(0.0);
+    const mvt_real g_cont = eps > MVT_R(0.0) ? continuing(c, y, noise, S_view, view, s, &p_cont) : MVT_R(0.0);
     const mvt_real right = (MVT_R(1.0) - eps) * (MVT_R(1.0) - p_cont);
     const mvt_real clutter =
         eps > MVT_R(0.0)
@@ -631,19 +626,19 @@ static mvt_err_t update(mvt_imm_t *imm, const mvt_imm_config_t *c, int m, const 
 mvt_err_t mvt_imm_update(mvt_imm_t *imm, const mvt_imm_config_t *c, int m, const mvt_real *H, const mvt_real *y,
                          const mvt_real *noise, mvt_cv_state_t *s)
 {
-    return update(imm, c, m, H, y, noise, s, 6, NULL);
+    return update(imm, c, m, H, y, noise, s, 6, NULL, NULL);
 }
 
 mvt_err_t mvt_imm_update_pos(mvt_imm_t *imm, const mvt_imm_config_t *c, int m, const mvt_real *H, const mvt_real *y,
                              const mvt_real *noise, mvt_cv_state_t *s)
 {
-    return update(imm, c, m, H, y, noise, s, 3, NULL);
+    return update(imm, c, m, H, y, noise, s, 3, NULL, NULL);
 }
 
 mvt_err_t mvt_imm_update_view(mvt_imm_t *imm, const mvt_imm_config_t *c, const mvt_real *H, const mvt_real *y,
-                              const mvt_real *noise, mvt_imm_view_t *view, mvt_cv_state_t *s)
+                              const mvt_real *noise, const mvt_real S[3], mvt_imm_view_t *view, mvt_cv_state_t *s)
 {
-    return update(imm, c, 2, H, y, noise, s, 3, view);
+    return update(imm, c, 2, H, y, noise, s, 3, S, view);
 }
 
 static mvt_err_t truncate_models(mvt_imm_t *imm, const mvt_imm_config_t *c, const mvt_real H[3], mvt_real value,

@@ -154,9 +154,11 @@ mvt_err_t mvt_imm_update(mvt_imm_t *imm, const mvt_imm_config_t *c, int m, const
  * by the prediction's H P H^T, the noise of both detections (2 R) and the drift over dt; otherwise
  * the detection is displaced anew with p_outlier or is the person's. Every model is updated with the probability
  * that the detection is the person's; *view receives the probability that it was displaced, its
- * offset y and s->utime_us. With outlier_persist_s 0 or p_outlier 0 it is mvt_imm_update_pos. */
+ * offset y and s->utime_us. S: the combined estimate's innovation covariance H P H^T + noise,
+ * packed xx xy yy (mvt_pkf_innov_t.S, which gating already computed). With outlier_persist_s 0 or
+ * p_outlier 0 it is mvt_imm_update_pos. */
 mvt_err_t mvt_imm_update_view(mvt_imm_t *imm, const mvt_imm_config_t *c, const mvt_real *H, const mvt_real *y,
-                              const mvt_real *noise, mvt_imm_view_t *view, mvt_cv_state_t *s);
+                              const mvt_real *noise, const mvt_real S[3], mvt_imm_view_t *view, mvt_cv_state_t *s);
 
 /* mvt_imm_predict_to and mvt_imm_update for several cameras in a row: s receives only what projecting
  * and gating the next camera read, the combined position and the position block of P (the velocity

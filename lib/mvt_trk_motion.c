@@ -77,7 +77,7 @@ mvt_err_t mvt_trk_update_pkf(mvt_tracker_t *self, mvt_track_t *tr, int k, const 
     if (mvt_trk_popcount(others) < 2) {
         tr->view[k].p = MVT_R(0.0);
     }
-    return mvt_imm_update_view(&tr->imm, &self->cfg.motion, in->H, in->y, noise, &tr->view[k], &tr->s);
+    return mvt_imm_update_view(&tr->imm, &self->cfg.motion, in->H, in->y, noise, in->S, &tr->view[k], &tr->s);
 }
 
 mvt_err_t mvt_trk_update_point(mvt_tracker_t *self, mvt_track_t *tr, const mvt_real z[3], const mvt_real R[9])

@@ -611,7 +611,7 @@ static void test_mvt_imm_view_memory_matches_eigen(void **state)
             assert_int_equal(mvt_pkf_meas_make(&cams[k], raw, 2.0f, &m), MVT_OK);
             assert_int_equal(mvt_pkf_innovation(&s, &cams[k], MVT_PKF_JACOBIAN, &m, &in), MVT_OK);
             const mvt_real noise[4] = {in.r, 0, 0, in.r};
-            assert_int_equal(mvt_imm_update_view(&imm, &cfg, in.H, in.y, noise, &view[k], &s), MVT_OK);
+            assert_int_equal(mvt_imm_update_view(&imm, &cfg, in.H, in.y, noise, in.S, &view[k], &s), MVT_OK);
             o.update(oc[k], Eigen::Vector2d(raw[0], raw[1]), 4.0, &ov[k], t);
             worst_p = std::fmax(worst_p, std::fabs((double)view[k].p - ov[k].p));
             assert_true(std::fabs((double)view[k].p - ov[k].p) < 0.03);
@@ -690,7 +690,7 @@ static double burst_error(mvt_real persist_s, unsigned seed)
             assert_int_equal(mvt_pkf_meas_make(&cams[k], raw, 6.0f, &m), MVT_OK);
             assert_int_equal(mvt_pkf_innovation(&s, &cams[k], MVT_PKF_JACOBIAN, &m, &in), MVT_OK);
             const mvt_real noise[4] = {in.r, 0, 0, in.r};
-            assert_int_equal(mvt_imm_update_view(&imm, &cfg, in.H, in.y, noise, &view[k], &s), MVT_OK);
+            assert_int_equal(mvt_imm_update_view(&imm, &cfg, in.H, in.y, noise, in.S, &view[k], &s), MVT_OK);
         }
         mvt_imm_combine(&imm, &cfg, &s);
         if (any) {
