@@ -171,6 +171,9 @@ static void step_projective(mvt_tracker_t *self, const mvt_frame_t *frame, const
                 err = mvt_trk_update_pkf(self, tr, k, &in, extra);
             }
             if (err == MVT_OK) {
+                if (tr->status != MVT_TRACK_TENTATIVE) {
+                    self->ev_llr[t] += mvt_trk_detected_llr(self, k, &in);
+                }
                 tr->cameras_used |= 1u << k;
                 if (tr->view[k].p < MVT_R(0.5)) {
                     tr->cameras_placed |= 1u << k;
@@ -296,9 +299,9 @@ mvt_err_t mvt_tracker_step(mvt_tracker_t *self, const mvt_frame_t *frame, mvt_ou
         self->counters.frames_time_backwards++;
         return MVT_ERR_INVALID;
     }
-    const mvt_real forget = self->have_time ? MVT_EXP(-mvt_us_to_s(frame->utime_us - self->last_utime_us) /
-                                                       MVT_TRK_NEED_MEMORY_S)
-                                            : MVT_R(1.0);
+    const mvt_real dt = self->have_time ? mvt_us_to_s(frame->utime_us - self->last_utime_us) : MVT_R(0.0);
+    const mvt_real forget = MVT_EXP(-dt / MVT_TRK_NEED_MEMORY_S);
+    mvt_trk_existence(self, dt);
     self->have_time = 1;
     self->last_utime_us = frame->utime_us;
     self->counters.frames++;

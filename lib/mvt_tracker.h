@@ -293,7 +293,9 @@ typedef struct mvt_track {
                                    ratio of the hiding blobs' edges, with against without them,
                                    forgotten with time constant MVT_TRK_NEED_MEMORY_S */
     mvt_real exist_llr;         /* tentative: log-likelihood ratio, person against clutter, of the
-                                   detections in its gates since its birth frame (mvt_trk_delete) */
+                                   detections in its gates since its birth frame (mvt_trk_delete);
+                                   confirmed: the log odds that its person is there, the same
+                                   evidence through a chain that forgets (mvt_trk_existence) */
     mvt_real seen_z, seen_zz;   /* head height and its variance the last frame seen: a coasting
                                    track's height spreads with the motion models' vertical noise,
                                    a person's does not (identity recovery compares this) */
@@ -371,7 +373,7 @@ typedef struct mvt_tracker {
     mvt_real ev_empty;                     /* ... of the place in no blob, ln(1 - p_detect) < 0 */
     mvt_real ev_clutter[MVT_MAX_CAMERAS];  /* clutter density: the view's detections (every one
                                               possibly clutter, at least one) per pixel^2 */
-    mvt_real ev_llr[MVT_MAX_TARGETS];      /* this frame's existence evidence of tentative tracks */
+    mvt_real ev_llr[MVT_MAX_TARGETS];      /* this frame's existence evidence of each track */
     mvt_real birth_rate;        /* births tried per frame, averaged over MVT_TRK_BIRTH_RATE_S
                                    (mvt_trk_init.c: the prior odds of a new track) */
     int64_t birth_rate_us;      /* the frame it was last updated, 0: never */

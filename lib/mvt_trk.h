@@ -43,6 +43,12 @@ static inline int mvt_trk_popcount(uint32_t x)
  * ln(99), a sequential test with 1 % error either way. In ordinary clutter a person's first frame
  * after the birth passes it; in a flood of false alarms a ghost's random detections do not. */
 #define MVT_TRK_EXIST_LLR MVT_R(4.595)
+/* A confirmed track's existence (exist_llr, the log odds that its person is there) is a two-state
+ * Markov chain that switches with probability 1 - exp(-dt / MVT_TRK_EXIST_MEMORY_S) a frame: what
+ * the cameras said a minute ago is forgotten, and the odds stay within +-ln(1500) at 25 fps, so
+ * that a track seen for a long time is not beyond the reach of what the cameras say now
+ * (mvt_trk_existence). */
+#define MVT_TRK_EXIST_MEMORY_S MVT_R(60.0)
 /* Time over which the rate of births tried is averaged for their prior odds (mvt_trk_init.c), s */
 #define MVT_TRK_BIRTH_RATE_S MVT_R(1.0)
 
@@ -156,6 +162,17 @@ mvt_real mvt_trk_birth_radius_px(const mvt_tracker_t *self, int k);
  * picture area, clamped to [0.01, 0.95]); a place in no blob weighs ln(1 - p_detect) (views with
  * boxes only: a view without boxes never shows a place empty). O(C D). */
 void mvt_trk_evidence_weights(mvt_tracker_t *self, const mvt_frame_t *frame);
+
+/* The Gaussian density (1/px^2) of an innovation, N(y; 0, S); 0 when S is not positive definite. */
+mvt_real mvt_trk_density(const mvt_pkf_innov_t *in);
+
+/* The existence evidence of a confirmed track (ev_llr, integrated PDA with visibility) that camera k
+ * updated with innovation in: ln(1 - p_detect + p_detect N(in) / clutter density). */
+mvt_real mvt_trk_detected_llr(const mvt_tracker_t *self, int k, const mvt_pkf_innov_t *in);
+
+/* Before a frame's evidence: every confirmed track's existence odds through the chain of
+ * MVT_TRK_EXIST_MEMORY_S over dt seconds. O(T). */
+void mvt_trk_existence(mvt_tracker_t *self, mvt_real dt);
 
 /* The log odds "a person is there" of a place that the cameras in support detect and `empty`
  * views show in no blob: the support weights less the two weakest (any two rays that meet make a

@@ -248,8 +248,8 @@ static int hypothesise(mvt_tracker_t *self, const mvt_view_t *view, int k, const
                         }
                         const mvt_real det = in.S[0] * in.S[2] - in.S[1] * in.S[1];
                         cost = in.d2 + spread_cost(det) + app_cost(self, k, t, d);
-                        if (tentative && det > MVT_R(0.0)) {
-                            g += MVT_EXP(MVT_R(-0.5) * in.d2) / (MVT_R(6.2831853) * MVT_SQRT(det));
+                        if (tentative) {
+                            g += mvt_trk_density(&in);
                         }
                     }
                 }

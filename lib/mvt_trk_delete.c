@@ -12,10 +12,12 @@
  * side walls is deleted sooner (people leave through the sides; its identity is kept for recovery
  * all the same, since people also walk along walls). Of two tracks closer than
  * dup_dist_m in 3D (one person, two tracks), the one the cameras did not place is deleted, else
- * the younger (delete_duplicates). Identities of deleted
+ * the younger, unless the cameras' evidence over time says one of them is nobody's
+ * (delete_duplicates). Identities of deleted
  * tracks are never given to another person; a confirmed track deleted while its person may still
  * be in the room leaves its identity for recovery (mvt_trk_recover.c).
  */
+#include <math.h>
 #include <stddef.h>
 
 #include "mvt_trk.h"
@@ -30,9 +32,11 @@ static int near_side_wall(const mvt_tracker_config_t *c, const mvt_real x[3])
     return 0;
 }
 
-/* Deletes one of every pair of live tracks closer than dup_dist_m: confirmed beats tentative, then
- * a track the cameras placed this frame (seen_min_views views) beats one they did not, then the
- * older identity wins. Two tracks become duplicates when one was pulled onto the other's person (a
+/* Deletes one of every pair of live tracks closer than dup_dist_m: confirmed beats tentative; of two
+ * confirmed (projective filters), one whose existence odds before this frame are more than
+ * MVT_TRK_EXIST_LLR below the other's goes (a track that lived on hidden after its person left,
+ * then was pulled onto someone: mvt_trk_existence); then a track the cameras placed this frame
+ * (seen_min_views views) beats one they did not, then the older identity wins. Two tracks become duplicates when one was pulled onto the other's person (a
  * merged blob's top, a detection along one view's ray): the placed track is that person's, the one
  * that drifted there is not, and its own person (hidden, most often) may still be in the room, so
  * a confirmed victim leaves its identity for recovery (mvt_trk_recover.c). Measured on the masks'
@@ -44,6 +48,7 @@ static void delete_duplicates(mvt_tracker_t *self, int64_t now_us)
         return;
     }
     const int min_views = mvt_trk_min_views(self);
+    const int projective = self->cfg.filter == MVT_FILTER_PROJECTIVE; /* existence has detections' evidence */
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         mvt_track_t *a = &self->tracks[t];
         for (int u = t + 1; u < MVT_MAX_TARGETS && a->id != 0; u++) {
@@ -58,7 +63,13 @@ static void delete_duplicates(mvt_tracker_t *self, int64_t now_us)
             const int a_conf = a->status != MVT_TRACK_TENTATIVE, b_conf = b->status != MVT_TRACK_TENTATIVE;
             const int a_hit = mvt_trk_popcount(a->cameras_used) >= min_views;
             const int b_hit = mvt_trk_popcount(b->cameras_used) >= min_views;
-            const int drop_a = a_conf != b_conf ? !a_conf : (a_hit != b_hit ? !a_hit : a->id > b->id);
+            int drop_a = a_conf != b_conf ? !a_conf : (a_hit != b_hit ? !a_hit : a->id > b->id);
+            /* the existence odds before this frame's evidence (this frame's placement is above): one
+             * track 99 times likelier to be a person's than the other is kept */
+            const mvt_real odds_a = a->exist_llr - self->ev_llr[t], odds_b = b->exist_llr - self->ev_llr[u];
+            if (a_conf && b_conf && projective && MVT_FABS(odds_a - odds_b) > MVT_TRK_EXIST_LLR) {
+                drop_a = odds_a < odds_b; /* the cameras' long say beats this frame's */
+            }
             mvt_track_t *victim = drop_a ? a : b;
             if (victim->status == MVT_TRACK_TENTATIVE) {
                 mvt_trk_give_back(self, victim, now_us); /* a tentative holding a lost identity */
@@ -136,6 +147,7 @@ void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us)
         case MVT_TRACK_CONFIRMED:
         case MVT_TRACK_COASTING:
             tr->status = tr->cameras_used != 0u ? MVT_TRACK_CONFIRMED : MVT_TRACK_COASTING;
+            tr->exist_llr += self->ev_llr[t];
             if (lost_s > c->coast_max_s) {
                 reason = &self->counters.deleted_unseen;
             } else if (unneeded_s > c->occluded_max_s) {

@@ -138,6 +138,45 @@ void mvt_trk_evidence_weights(mvt_tracker_t *self, const mvt_frame_t *frame)
     self->ev_empty = MVT_LOG(MVT_R(1.0) - pd);
 }
 
+mvt_real mvt_trk_density(const mvt_pkf_innov_t *in)
+{
+    const mvt_real det = in->S[0] * in->S[2] - in->S[1] * in->S[1];
+    if (!(det > MVT_R(0.0)) || !(in->S[0] > MVT_R(0.0))) {
+        return MVT_R(0.0);
+    }
+    return MVT_EXP(MVT_R(-0.5) * in->d2) / (MVT_R(6.2831853) * MVT_SQRT(det));
+}
+
+mvt_real mvt_trk_detected_llr(const mvt_tracker_t *self, int k, const mvt_pkf_innov_t *in)
+{
+    const mvt_real pd = self->cfg.p_detect;
+    return MVT_LOG(MVT_R(1.0) - pd + pd * mvt_trk_density(in) / self->ev_clutter[k]);
+}
+
+void mvt_trk_existence(mvt_tracker_t *self, mvt_real dt)
+{
+    const mvt_real a = MVT_R(1.0) - MVT_EXP(-dt / MVT_TRK_EXIST_MEMORY_S); /* switch, per frame */
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        mvt_track_t *tr = &self->tracks[t];
+        if (tr->id == 0 || tr->status == MVT_TRACK_TENTATIVE || !(a > MVT_R(0.0))) {
+            continue;
+        }
+        const mvt_real p = MVT_R(1.0) / (MVT_R(1.0) + MVT_EXP(-tr->exist_llr));
+        const mvt_real q = p * (MVT_R(1.0) - a) + (MVT_R(1.0) - p) * a; /* in (a, 1 - a) */
+        tr->exist_llr = MVT_LOG(q / (MVT_R(1.0) - q));
+    }
+}
+
+/* The probability that a head predicted at h with standard deviations su, sv (pixels, uncorrelated)
+ * lies in camera k's picture. */
+static mvt_real in_picture(const mvt_camera_t *cam, const mvt_real h[2], mvt_real su, mvt_real sv)
+{
+    const mvt_real r2 = MVT_R(0.70710678118654752);
+    const mvt_real pu = MVT_R(0.5) * (MVT_ERFC(-h[0] / su * r2) - MVT_ERFC(((mvt_real)cam->width - h[0]) / su * r2));
+    const mvt_real pv = MVT_R(0.5) * (MVT_ERFC(-h[1] / sv * r2) - MVT_ERFC(((mvt_real)cam->height - h[1]) / sv * r2));
+    return pu * pv;
+}
+
 mvt_real mvt_trk_odds(const mvt_tracker_t *self, uint32_t support, int empty)
 {
     mvt_real sum = MVT_R(0.0), lo1 = MVT_R(0.0), lo2 = MVT_R(0.0);
@@ -339,6 +378,16 @@ void mvt_trk_occlusion(mvt_tracker_t *self, const mvt_view_t *view, int k, const
             }
         }
         if (best < 0) {
+            /* existence (mvt_trk_existence): not seen, not hidden, and no box near the head: the
+             * person was missed, if in the picture at all */
+            const mvt_real slack = empty_slack(cam, p);
+            int covered = 0;
+            for (int d = 0; d < nd && !covered; d++) {
+                covered = mvt_trk_in_box(view->det[d].box, p->h, slack, slack);
+            }
+            if (!covered && su > MVT_R(0.0) && sv > MVT_R(0.0)) {
+                self->ev_llr[t] += MVT_LOG(MVT_R(1.0) - c->p_detect * in_picture(cam, p->h, su, sv));
+            }
             /* in the picture, not seen and not hidden in a blob another track took: this view
              * contradicts the track (unless the detector missed the whole blob) */
             const mvt_real m = MVT_R(2.0) * sv + MVT_R(2.0) * su + MVT_R(8.0);

@@ -333,8 +333,12 @@ static void test_mvt_tracker_step_close_pair_both_kept(void **state)
 /* Two confirmed tracks end up on one person: the older one was pulled there (along one view's ray,
  * by a merged blob's top) while the cameras placed the younger. The duplicate rule keeps the placed
  * track and deletes the other, whose identity is kept for recovery (its own person may be hidden
- * nearby); when both or neither were placed, the older identity wins. */
-static void duplicate_pair(uint32_t used_old, uint32_t used_young, int *old_kept, int *young_kept, int *old_record)
+ * nearby); when both or neither were placed, the older identity wins. Unless the cameras have long
+ * said that one of them is nobody: exist (old, young; NULL: as the frames left them) sets the
+ * tracks' existence log odds, as a track whose person left while it lived on hidden in others'
+ * blobs has them. */
+static void duplicate_pair(uint32_t used_old, uint32_t used_young, const mvt_real *exist, int *old_kept,
+                           int *young_kept, int *old_record)
 {
     init();
     const mvt_real q[3] = {0.5f, 0.5f, 0.05f}; /* one model: the state edited below is the track's */
@@ -360,6 +364,16 @@ static void duplicate_pair(uint32_t used_old, uint32_t used_young, int *old_kept
     a->s.x[2] = b->s.x[2] - 0.05f;
     a->cameras_used = used_old;
     b->cameras_used = used_young;
+    /* the next frame's odds before its evidence (none): both seen in every view for 20 frames, the
+     * chain's ceiling ln((1 - a) / a) = 7.3 at 25 fps */
+    mvt_trk_existence(&g_tracker, 0.04f);
+    memset(g_tracker.ev_llr, 0, sizeof(g_tracker.ev_llr));
+    assert_float_equal(a->exist_llr, 7.313f, 0.01f);
+    assert_float_equal(b->exist_llr, 7.313f, 0.01f);
+    if (exist != NULL) {
+        a->exist_llr = exist[0];
+        b->exist_llr = exist[1];
+    }
     mvt_trk_delete(&g_tracker, t);
     *old_kept = a->id == id_old;
     *young_kept = b->id == id_young;
@@ -374,11 +388,25 @@ static void test_mvt_tracker_duplicates_placed_track_kept(void **state)
 {
     (void)state;
     int old_kept, young_kept, old_record;
-    duplicate_pair(0x1u, 0x1fu, &old_kept, &young_kept, &old_record); /* one view placed the old one */
+    duplicate_pair(0x1u, 0x1fu, NULL, &old_kept, &young_kept, &old_record); /* one view placed the old one */
     assert_true(!old_kept && young_kept && old_record);
-    duplicate_pair(0x3u, 0x1fu, &old_kept, &young_kept, &old_record); /* both placed: the older wins */
+    duplicate_pair(0x3u, 0x1fu, NULL, &old_kept, &young_kept, &old_record); /* both placed: the older wins */
     assert_true(old_kept && !young_kept);
-    duplicate_pair(0x0u, 0x1u, &old_kept, &young_kept, &old_record); /* neither placed: the older wins */
+    duplicate_pair(0x0u, 0x1u, NULL, &old_kept, &young_kept, &old_record); /* neither placed: the older wins */
+    assert_true(old_kept && !young_kept);
+    /* the old track is a ghost by the cameras' long say: it goes even placed, and the young one not */
+    const mvt_real ghost[2] = {-10.0f, 7.3f}, doubt[2] = {3.0f, 7.3f}, young_ghost[2] = {7.3f, -10.0f};
+    const mvt_real both_ghosts[2] = {-7.3f, -3.0f};
+    duplicate_pair(0x1fu, 0x1u, ghost, &old_kept, &young_kept, &old_record);
+    assert_true(!old_kept && young_kept && old_record);
+    duplicate_pair(0x3u, 0x3u, ghost, &old_kept, &young_kept, &old_record);
+    assert_true(!old_kept && young_kept);
+    duplicate_pair(0x1u, 0x1fu, young_ghost, &old_kept, &young_kept, &old_record);
+    assert_true(old_kept && !young_kept);
+    /* odds within ln 99 of each other: the rules above */
+    duplicate_pair(0x1fu, 0x1u, doubt, &old_kept, &young_kept, &old_record);
+    assert_true(old_kept && !young_kept);
+    duplicate_pair(0x1fu, 0x1u, both_ghosts, &old_kept, &young_kept, &old_record);
     assert_true(old_kept && !young_kept);
 }
 
