@@ -44,8 +44,8 @@ static inline int mvt_trk_popcount(uint32_t x)
  * after the birth passes it; in a flood of false alarms a ghost's random detections do not. */
 #define MVT_TRK_EXIST_LLR MVT_R(4.595)
 /* A confirmed track's existence (exist_llr, the log odds that its person is there) is a two-state
- * Markov chain that switches with probability 1 - exp(-dt / MVT_TRK_EXIST_MEMORY_S) a frame: what
- * the cameras said a minute ago is forgotten, and the odds stay within +-ln(1500) at 25 fps, so
+ * Markov chain that switches each way at rate 1 / MVT_TRK_EXIST_MEMORY_S: what the cameras said a
+ * minute ago is forgotten, and before a frame's evidence the odds lie within +-ln(1500) at 25 fps, so
  * that a track seen for a long time is not beyond the reach of what the cameras say now
  * (mvt_trk_existence). */
 #define MVT_TRK_EXIST_MEMORY_S MVT_R(60.0)

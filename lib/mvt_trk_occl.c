@@ -155,14 +155,16 @@ mvt_real mvt_trk_detected_llr(const mvt_tracker_t *self, int k, const mvt_pkf_in
 
 void mvt_trk_existence(mvt_tracker_t *self, mvt_real dt)
 {
-    const mvt_real a = MVT_R(1.0) - MVT_EXP(-dt / MVT_TRK_EXIST_MEMORY_S); /* switch, per frame */
+    /* the chance that a chain switching at rate 1 / MVT_TRK_EXIST_MEMORY_S each way is in the other
+     * state after dt: dt / memory for a frame, 1/2 (all forgotten) after a long gap */
+    const mvt_real a = MVT_R(0.5) * (MVT_R(1.0) - MVT_EXP(MVT_R(-2.0) * dt / MVT_TRK_EXIST_MEMORY_S));
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         mvt_track_t *tr = &self->tracks[t];
         if (tr->id == 0 || tr->status == MVT_TRACK_TENTATIVE || !(a > MVT_R(0.0))) {
             continue;
         }
         const mvt_real p = MVT_R(1.0) / (MVT_R(1.0) + MVT_EXP(-tr->exist_llr));
-        const mvt_real q = p * (MVT_R(1.0) - a) + (MVT_R(1.0) - p) * a; /* in (a, 1 - a) */
+        const mvt_real q = p * (MVT_R(1.0) - a) + (MVT_R(1.0) - p) * a; /* in [a, 1 - a] */
         tr->exist_llr = MVT_LOG(q / (MVT_R(1.0) - q));
     }
 }

@@ -410,6 +410,32 @@ static void test_mvt_tracker_duplicates_placed_track_kept(void **state)
     assert_true(old_kept && !young_kept);
 }
 
+/* A confirmed track's existence odds between frames: the symmetric two-state chain of rate
+ * 1 / MVT_TRK_EXIST_MEMORY_S, whose probability relaxes to 1/2 as P' = 1/2 + (P - 1/2) e^(-2 dt / tau)
+ * (the closed form, in double): a frame's step, a minute's and an hour's; never past even odds. */
+static void test_mvt_trk_existence_chain_forgets_never_flips(void **state)
+{
+    (void)state;
+    duplicate_pair(0x1fu, 0x1fu, NULL, &(int){0}, &(int){0}, &(int){0}); /* a tracker with confirmed tracks */
+    const double L0[] = {7.3, -7.3, 3.0, -20.0, 40.0}, dts[] = {0.04, 60.0, 3600.0};
+    for (size_t i = 0; i < sizeof(L0) / sizeof(L0[0]); i++) {
+        for (size_t j = 0; j < sizeof(dts) / sizeof(dts[0]); j++) {
+            mvt_track_t *tr = NULL;
+            for (int t = 0; t < MVT_MAX_TARGETS && tr == NULL; t++) {
+                tr = g_tracker.tracks[t].id != 0 ? &g_tracker.tracks[t] : NULL;
+            }
+            assert_non_null(tr);
+            tr->exist_llr = (mvt_real)L0[i];
+            mvt_trk_existence(&g_tracker, (mvt_real)dts[j]);
+            const double P = 1.0 / (1.0 + exp(-L0[i]));
+            const double Q = 0.5 + (P - 0.5) * exp(-2.0 * dts[j] / (double)MVT_TRK_EXIST_MEMORY_S);
+            const double want = log(Q / (1.0 - Q));
+            assert_true(fabs((double)tr->exist_llr - want) < 0.01 + 1e-4 * fabs(want));
+            assert_true(L0[i] > 0 ? tr->exist_llr >= 0 : tr->exist_llr <= 0);
+        }
+    }
+}
+
 /* A confirmed track drifted 0.4 m off its hidden person, so views show its place empty
  * (contradicted), and 0.2 s after the cameras last placed it the person is born again there: the
  * old track is deleted into a record and the birth takes its identity through recovery. Not when
@@ -1176,6 +1202,7 @@ int main(void)
         cmocka_unit_test(test_mvt_tracker_step_lost_tracks_reacquired_by_height),
         cmocka_unit_test(test_mvt_tracker_step_close_pair_both_kept),
         cmocka_unit_test(test_mvt_tracker_duplicates_placed_track_kept),
+        cmocka_unit_test(test_mvt_trk_existence_chain_forgets_never_flips),
         cmocka_unit_test(test_mvt_tracker_contradicted_track_gives_identity_to_rebirth),
         cmocka_unit_test(test_mvt_tracker_step_false_alarm_flood_confirmed_tracks_survive),
         cmocka_unit_test(test_mvt_tracker_step_more_people_than_capacity_births_refused_counted),
