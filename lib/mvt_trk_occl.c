@@ -380,13 +380,13 @@ void mvt_trk_occlusion(mvt_tracker_t *self, const mvt_view_t *view, int k, const
             }
         }
         if (best < 0) {
-            /* existence (mvt_trk_existence): not seen, not hidden, and no box near the head: the
-             * person was missed, if in the picture at all */
+            /* not seen, not hidden: is any blob at all near the head? */
             const mvt_real slack = empty_slack(cam, p);
             int covered = 0;
             for (int d = 0; d < nd && !covered; d++) {
                 covered = mvt_trk_in_box(view->det[d].box, p->h, slack, slack);
             }
+            /* existence (mvt_trk_existence): with none, the person was missed, if in the picture */
             if (!covered && su > MVT_R(0.0) && sv > MVT_R(0.0)) {
                 self->ev_llr[t] += MVT_LOG(MVT_R(1.0) - c->p_detect * in_picture(cam, p->h, su, sv));
             }
@@ -396,8 +396,10 @@ void mvt_trk_occlusion(mvt_tracker_t *self, const mvt_view_t *view, int k, const
             if (p->h[0] >= m && p->h[0] <= (mvt_real)cam->width - m && p->h[1] >= m &&
                 p->h[1] <= (mvt_real)cam->height - m) {
                 tr->cameras_uncovered |= 1u << k;
-                /* ... and if no blob at all holds the place, it shows the place empty */
-                if (mvt_trk_view_evidence(self, view, k, tr->s.x, empty_slack(cam, p)) == MVT_TRK_EMPTY) {
+                /* ... and if no blob at all holds the place (not too near the border to say, as
+                 * mvt_trk_view_evidence), it shows the place empty */
+                if (!covered && p->h[0] >= slack && p->h[1] >= slack && p->h[0] <= (mvt_real)cam->width - slack &&
+                    p->h[1] <= (mvt_real)cam->height - slack) {
                     tr->cameras_empty |= 1u << k;
                 }
             }
