@@ -11,7 +11,7 @@ import pytest
 from mvtrack_tools.crowd import DetectorModel, crowd_scene, detect
 from mvtrack_tools.flood import score, write_flood_log
 from mvtrack_tools.lcmio import LogWriter, TrackLog, camera_frame, ground_truth, read_log
-from mvtrack_tools.mot import clear_mot, ospa, pair_frames
+from mvtrack_tools.mot import clear_mot, identity_switches, ospa, pair_frames
 from mvtrack_tools.rig import random_rig, smartroom
 from mvtrack_tools.simulate import T0_UTIME, build_multi, write_multi
 
@@ -60,6 +60,66 @@ def test_clear_mot_motp_in_mm_switches_and_misses():
     assert r.misses == 1 and r.false_positives == 1 and r.id_switches == 1
     assert r.mota == pytest.approx(1 - 3 / 20)
     assert r.motp_mm == pytest.approx((10 * 30 + 9 * 40) / 19, rel=1e-6)
+
+
+@pytest.mark.tools
+def test_identity_switches_classified_by_how_they_came_about():
+    p1, p2, far = (0.0, 0.0, 1.7), (2.0, 0.0, 1.7), (5.0, 0.0, 1.7)
+    gt = [([1, 2], [p1, p2])] * 100
+    trk = []
+    for f in range(100):
+        if f < 40:    # 10 follows person 1, 20 person 2 (1.6 s)
+            t = [_T(10, p1), _T(20, p2)]
+        elif f < 80:  # 20 takes person 1 (10 is gone); a new track 30 is born on person 2
+            t = [_T(20, p1), _T(30, p2)]
+        else:         # 1.64 s after it last followed person 1, identity 10 comes back on person 2
+            t = [_T(20, p1), _T(10, p2)]
+        trk.append(t)
+    frames = pair_frames(*_logs(gt, trk))
+    sw, runs = identity_switches(frames)
+    got = [(s.frame, s.person, s.old_track, s.new_track, s.kind, s.was_following) for s in sw]
+    assert got == [(40, 1, 10, 20, "took", 2), (40, 2, 20, 30, "born", None), (80, 2, 30, 10, "passed", 1)]
+    assert len(sw) == clear_mot(frames).id_switches
+    assert runs[1] == [(10, 0, 39), (20, 40, 99)]
+    assert runs[2] == [(20, 0, 39), (30, 40, 79), (10, 80, 99)]
+    # person 1 is missed, born again as 11, given back their own 10; then 12, a track that has
+    # followed nobody for 2.4 s, takes them
+    gt = [([1], [p1])] * 80
+    trk = ([[_T(10, p1), _T(12, far)]] * 20 + [[_T(12, far)]] * 10 + [[_T(11, p1), _T(12, far)]] * 20 +
+           [[_T(10, p1), _T(12, far)]] * 10 + [[_T(12, p1)]] * 20)
+    sw, runs = identity_switches(pair_frames(*_logs(gt, trk)))
+    assert [(s.frame, s.kind) for s in sw] == [(30, "born"), (50, "returned"), (60, "ghost")]
+    assert runs[1][1] == (None, 20, 29)
+
+
+@pytest.mark.tools
+def test_identities_command_prints_switches_and_refuses_logs_without_truth(tmp_path, capsys):
+    from mvtrack_tools import identities
+    import mvtrack_tools.lcmio as lcmio
+
+    log = tmp_path / "scene.lcm"
+    w = LogWriter(str(log))
+    for f in range(60):
+        u = T0_UTIME + f * 40000
+        w.write(u, "GROUND_TRUTH", ground_truth(u, f, [1], np.array([[1.0, 1.0, 1.7]])))
+        m = lcmio.mt.tracks_t()
+        m.utime, m.frame = u, f
+        t = lcmio.mt.track_t()
+        t.id, t.status = (5 if f < 30 else 6), 2
+        t.position, t.velocity = [1.0, 1.0, 1.7], [0.0, 0.0, 0.0]
+        m.tracks = [t]
+        m.num_tracks = 1
+        w.write(u, "TRACKS", m)
+    w.close()
+    assert identities.main(["--scene", str(log), "--tracks", str(log)]) == 0
+    out = capsys.readouterr().out
+    assert "person 1: track 5 -> 6  born" in out and "1 switches: 1 born" in out
+    empty = tmp_path / "empty.lcm"
+    LogWriter(str(empty)).close()
+    with pytest.raises(SystemExit) as e:
+        identities.main(["--scene", str(empty), "--tracks", str(log)])
+    assert e.value.code == 2
+    assert "no GROUND_TRUTH" in capsys.readouterr().err
 
 
 @pytest.mark.tools

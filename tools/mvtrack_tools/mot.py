@@ -155,3 +155,68 @@ def clear_mot(frames: list[FrameSet]) -> MotResult:
 
 def as_dict(r: MotResult) -> dict:
     return asdict(r)
+
+
+@dataclass
+class Switch:
+    """One identity switch (CLEAR MOT's, as motmetrics counts it) and how it came about."""
+    frame: int
+    utime: int
+    person: int
+    old_track: int | None   # the track the person had before (None: never had one)
+    new_track: int
+    kind: str               # "born": the new track is under `young_s` old (a birth after the person
+                            # was lost); "took": the new track was following another person less
+                            # than `young_s` before (a swap or a takeover); "passed": it followed
+                            # another person longer ago (their identity, kept for recovery or
+                            # re-acquisition, given to this person); "returned": it was this
+                            # person's before; "ghost": it was older but had followed nobody
+    was_following: int | None  # "took", "passed": the person the new track followed before
+
+
+def identity_switches(frames: list[FrameSet], young_s: float = 1.0) -> tuple[list[Switch], dict[int, list]]:
+    """The switches of clear_mot's matching, each classified (Switch.kind), and per person the runs
+    of the identities that covered them: {person: [(track or None while missed, first, last frame)]}."""
+    import motmetrics as mm
+
+    acc = mm.MOTAccumulator(auto_id=True)
+    first_seen: dict[int, int] = {}
+    for i, fs in enumerate(frames):
+        acc.update(fs.gt_ids, fs.hyp_ids, distance_matrix(fs.gt_pos, fs.hyp_pos))
+        for h in fs.hyp_ids:
+            first_seen.setdefault(h, i)
+    utimes = [fs.utime for fs in frames]
+    follows: dict[int, int] = {}      # track -> the person it was last matched to
+    follows_f: dict[int, int] = {}    # ... and the frame
+    had: dict[int, int] = {}          # person -> the track last matched to them
+    runs: dict[int, list] = {}
+    out: list[Switch] = []
+    for (f, _), row in acc.mot_events.iterrows():
+        if row.Type not in ("MATCH", "SWITCH", "MISS"):
+            continue
+        o = int(row.OId)
+        h = None if row.Type == "MISS" else int(row.HId)
+        r = runs.setdefault(o, [])
+        if r and r[-1][0] == h and r[-1][2] == f - 1:
+            r[-1][2] = f
+        else:
+            r.append([h, f, f])
+        if h is None:
+            continue
+        if row.Type == "SWITCH":
+            age_s = (utimes[f] - utimes[first_seen[h]]) * 1e-6
+            prev = follows.get(h)
+            if age_s < young_s:
+                kind = "born"
+            elif prev is None:
+                kind = "ghost"
+            elif prev == o:
+                kind = "returned"
+            else:
+                kind = "took" if (utimes[f] - utimes[follows_f[h]]) * 1e-6 < young_s else "passed"
+            out.append(Switch(int(f), int(utimes[f]), o, had.get(o), h, kind,
+                              prev if kind in ("took", "passed") else None))
+        follows[h] = o
+        follows_f[h] = int(f)
+        had[o] = h
+    return out, {o: [tuple(x) for x in r] for o, r in runs.items()}
