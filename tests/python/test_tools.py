@@ -293,3 +293,67 @@ def test_oracles_reach_the_bound_they_should():
     assert 0.85 < ratios["ekf-true"] < 1.1, ratios
     assert ratios["imm-generator"] > ratios["kf-schedule"], ratios
     assert ratios["imm-generator"] < 1.5, ratios
+
+
+def _residual_logs(tmp_path, offset_cam4=(0.0, -25.0), with_tracks=True):
+    """A person walking through the smart room for 4 s: cameras 0-3 detect the projected head with
+    1.5 px noise, camera 4 with a fixed offset; GROUND_TRUTH and (optionally) a confirmed track on
+    the person in a TRACKS message 10 ms late (its position then: carried back by its velocity)."""
+    from mvtrack_tools.lcmio import LogWriter, camera_frame, ground_truth, mt
+
+    rig = smartroom()
+    rig.write(tmp_path / "rig.yaml")
+    rng = np.random.default_rng(4)
+    w = LogWriter(str(tmp_path / "log.lcm"))
+    t0 = 1_700_000_000_000_000
+    for f in range(100):
+        u = t0 + f * 40000
+        X = np.array([[1.5 + 0.03 * f, 2.5, 1.7]])
+        for k, cam in enumerate(rig.cameras):
+            uv = cam.project(X)[0] + (np.asarray(offset_cam4) if k == 4 else rng.normal(0, 1.5, 2))
+            w.write(u, f"DETECTIONS_{cam.name}", camera_frame(u, f, cam, [(uv[0], uv[1])], 2.0))
+        w.write(u, "GROUND_TRUTH", ground_truth(u, f, [1], X))
+        if with_tracks:
+            m = mt.tracks_t()
+            m.utime, m.frame = u + 10000, f
+            t = mt.track_t()
+            t.id, t.status = 7, 2
+            t.position, t.velocity = [1.5 + 0.03 * f + 0.0075, 2.5, 1.7], [0.75, 0.0, 0.0]
+            m.tracks, m.num_tracks = [t], 1
+            w.write(u, "TRACKS", m)
+    w.close()
+    return rig, tmp_path / "log.lcm"
+
+
+def test_residuals_flag_a_camera_whose_points_are_not_heads(tmp_path, capsys):
+    from mvtrack_tools import residuals
+    from mvtrack_tools.lcmio import read_log
+
+    rig, log = _residual_logs(tmp_path)
+    for truth in (True, False):
+        res, arrays = residuals.residuals(rig, str(log), read_log(str(log)), truth)
+        by = {c.camera: c for c in res}
+        assert by["cam4"].paired == by["cam4"].heads == 100 and by["cam4"].flagged
+        assert by["cam4"].median_px == pytest.approx(25.0, abs=0.01)
+        assert by["cam4"].mean_dv_px == pytest.approx(-25.0, abs=0.01) and abs(by["cam4"].mean_du_px) < 0.01
+        for k in range(4):
+            c = by[f"cam{k}"]
+            assert not c.flagged and c.paired == c.heads > 90
+            assert 1.0 < c.median_px < 2.5 and c.beyond_10px == 0.0  # 1.5 px noise: median 1.77 px
+    # a camera within the noise of the others is not flagged
+    rig, log = _residual_logs(tmp_path, offset_cam4=(1.0, -1.0))
+    res, _ = residuals.residuals(rig, str(log), read_log(str(log)), True)
+    assert not any(c.flagged for c in res)
+    # the command: table, plot, and clear errors for bad input
+    assert residuals.main(["--rig", str(tmp_path / "rig.yaml"), "--detections", str(log), "--truth",
+                           "--plot", str(tmp_path / "r.png")]) == 0
+    assert (tmp_path / "r.png").stat().st_size > 1000
+    assert "cam4" in capsys.readouterr().out
+    rig, log = _residual_logs(tmp_path, with_tracks=False)
+    for args, msg in ((["--detections", str(log)], "holds no TRACKS"),
+                      (["--detections", str(log), "--truth", "--radius", "0"], "--radius must be > 0"),
+                      (["--detections", str(tmp_path / "missing.lcm"), "--truth"], "cannot read")):
+        with pytest.raises(SystemExit) as e:
+            residuals.main(["--rig", str(tmp_path / "rig.yaml")] + args)
+        assert e.value.code == 2
+        assert msg in capsys.readouterr().err
