@@ -220,3 +220,12 @@ def identity_switches(frames: list[FrameSet], young_s: float = 1.0) -> tuple[lis
         follows_f[h] = int(f)
         had[o] = h
     return out, {o: [tuple(x) for x in r] for o, r in runs.items()}
+
+
+SWITCH_KINDS = ("born", "took", "passed", "returned", "ghost")
+
+
+def switch_kinds(frames: list[FrameSet]) -> dict[str, int]:
+    """The identity switches counted by kind (identity_switches), as summary keys switches_<kind>."""
+    sw, _ = identity_switches(frames)
+    return {f"switches_{k}": sum(1 for s in sw if s.kind == k) for k in SWITCH_KINDS}
