@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import shlex
 import subprocess
 import sys
 import tempfile
@@ -91,6 +92,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--image", type=Path, help="write a labelled frame with its detections here")
     ap.add_argument("--frame", type=int, default=700, help="the frame for --image (default 700)")
     ap.add_argument("--json", action="store_true", help="print the result as JSON")
+    ap.add_argument("--detect-args", default="", metavar="ARGS",
+                    help="more mvtrack-detect options, e.g. \"--history-s 600\"")
     a = ap.parse_args(argv)
     if not VTEST.exists():
         ap.error(f"{VTEST} is missing: tools/mvtrack setup installs opencv-doc")
@@ -98,7 +101,8 @@ def main(argv: list[str] | None = None) -> int:
     with tempfile.TemporaryDirectory() as tmp:
         log = Path(tmp) / "det.lcm"
         subprocess.run([str(BUILD / "bin" / "mvtrack-detect"), "--rig", str(RIG), "--video", f"view1={VTEST}",
-                        "--out", f"file://{log}?mode=w", "--bg", a.bg, "--status-s", "0", "--quiet"], check=True)
+                        "--out", f"file://{log}?mode=w", "--bg", a.bg, "--status-s", "0", "--quiet"]
+                       + shlex.split(a.detect_args), check=True)
         dets = detections(log)
     r = score(dets, labels, a.radius)
     r["bg"] = a.bg
