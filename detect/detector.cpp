@@ -365,7 +365,34 @@ void Detector::process(const cv::Mat &bgr, Result &out)
         return;
     }
     frames_++;
-    bg_->apply(small_, fg_raw_, cfg_.learning_rate >= 0.0 ? cfg_.learning_rate : 1.0 / history_frames_);
+    const double rate = cfg_.learning_rate >= 0.0 ? cfg_.learning_rate : 1.0 / history_frames_;
+    if (cfg_.absorb_s > 0.0) {
+        /* selective update: classify without learning, then learn a frame in which the pixels
+         * foreground for less than absorb_s show the background's own colour */
+        bg_->apply(small_, fg_raw_, 0.0);
+        if (fg_age_.size() != small_.size()) {
+            fg_age_ = cv::Mat::zeros(small_.size(), CV_32S);
+        }
+        const int absorb_frames = std::max(1, (int)std::lround(cfg_.absorb_s * cfg_.frame_rate));
+        protect_.create(small_.size(), CV_8U);
+        for (int y = 0; y < small_.rows; y++) {
+            const uint8_t *f = fg_raw_.ptr<uint8_t>(y);
+            int32_t *a = fg_age_.ptr<int32_t>(y);
+            uint8_t *p = protect_.ptr<uint8_t>(y);
+            for (int x = 0; x < small_.cols; x++) {
+                a[x] = f[x] == 255 ? a[x] + 1 : 0;
+                p[x] = (uint8_t)(f[x] == 255 && a[x] < absorb_frames ? 255 : 0);
+            }
+        }
+        bg_->getBackgroundImage(bg_img_);
+        small_.copyTo(learn_);
+        if (bg_img_.size() == learn_.size() && bg_img_.type() == learn_.type()) {
+            bg_img_.copyTo(learn_, protect_);
+        }
+        bg_->apply(learn_, fg_scratch_, rate);
+    } else {
+        bg_->apply(small_, fg_raw_, rate);
+    }
     cv::threshold(fg_raw_, fg_, 200, 255, cv::THRESH_BINARY); /* shadows are 127 */
     cv::morphologyEx(fg_, tmp_, cv::MORPH_OPEN, open_kernel_);
     cv::morphologyEx(tmp_, fg_, cv::MORPH_CLOSE, close_kernel_);

@@ -45,12 +45,19 @@ enum class BgModel { mog2, knn };
 struct Config {
     BgModel model = BgModel::mog2;
     int work_scale = 2;              /* image pixels per working pixel, 1..8 */
-    double history_s = 120.0;        /* the background model's memory, seconds (a person standing
-                                      * still fades into it after about a tenth of that) */
+    double history_s = 120.0;        /* the background model's memory, seconds (without absorb_s a
+                                      * person standing still fades into it after about a tenth of
+                                      * that) */
     double frame_rate = 25.0;        /* frames per second (the rig's), to turn seconds into frames */
     double var_threshold = 16.0;     /* MOG2: squared Mahalanobis distance; KNN: squared distance (400) */
     bool shadows = true;             /* detect shadows (darker, same chromaticity) and drop them */
     double learning_rate = -1.0;     /* < 0: 1/history */
+    double absorb_s = 120.0;         /* a pixel that has been foreground for less than this is
+                                      * learnt as the background's own colour there, not as its
+                                      * colour now, so a person standing still stays foreground that
+                                      * long, and a moved chair joins the background after it
+                                      * (selective update); 0: every pixel is learnt, and anything
+                                      * still fades after about a tenth of history_s */
     double bootstrap_s = 2.0;        /* the model starts from the per-pixel median of the first
                                       * frames (people walking through are not in it); no blobs
                                       * meanwhile. OpenCV's own start (rate 1/frames until `history`)
@@ -136,6 +143,8 @@ class Detector {
     int history_frames_ = 1, bootstrap_frames_ = 0;
     double ref_brightness_ = -1.0;   /* mean background brightness the frames are scaled to */
     cv::Mat prev_bg_;                /* last frame's background pixels (where the gain is measured) */
+    cv::Mat fg_age_;                 /* frames each working pixel has been foreground (absorb_s) */
+    cv::Mat bg_img_, learn_, protect_, fg_scratch_;
 };
 
 } // namespace mvdet

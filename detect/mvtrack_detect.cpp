@@ -63,8 +63,12 @@ void usage(FILE *f)
         "  --mask-scale N          image pixels per mask pixel (default 4: 192x144 for 768x576)\n"
         "  --bg mog2|knn           background model (default mog2)\n"
         "  --work-scale N          image pixels per working pixel (default 2)\n"
-        "  --history-s S           the background model's memory in seconds (default 120: a person\n"
-        "                          standing still fades into the background after about S/10)\n"
+        "  --history-s S           the background model's memory in seconds (default 120)\n"
+        "  --absorb-s S            a pixel foreground for less than S seconds is learnt as the\n"
+        "                          background's own colour there, so a person standing still stays\n"
+        "                          foreground that long, and a moved object joins the background\n"
+        "                          after it (default 120; 0: off, anything still fades after about\n"
+        "                          --history-s/10)\n"
         "  --bootstrap-s S         seconds of video whose per-pixel median starts the background model\n"
         "                          (default 2; no blobs meanwhile)\n"
         "  --no-gain-compensation  do not scale frames to the background's reference brightness\n"
@@ -180,7 +184,7 @@ int main(int argc, char **argv)
     bool progress = false, quiet = false, realtime = false;
     mvdet::Config cfg;
 
-    enum { O_RIG = 1000, O_VIDEO, O_OUT, O_START, O_MASKS, O_MASK_SCALE, O_BG, O_WORK, O_HISTORY, O_BOOT, O_NO_GAIN, O_VAR,
+    enum { O_RIG = 1000, O_VIDEO, O_OUT, O_START, O_MASKS, O_MASK_SCALE, O_BG, O_WORK, O_HISTORY, O_ABSORB, O_BOOT, O_NO_GAIN, O_VAR,
            O_NO_SHADOWS, O_MINFRAC, O_SIGMA, O_MAXF, O_STATUS, O_THREADS, O_PROGRESS, O_QUIET, O_REALTIME };
     static const struct option opts[] = {
         {"rig", required_argument, nullptr, O_RIG}, {"video", required_argument, nullptr, O_VIDEO},
@@ -188,6 +192,7 @@ int main(int argc, char **argv)
         {"masks", no_argument, nullptr, O_MASKS}, {"mask-scale", required_argument, nullptr, O_MASK_SCALE},
         {"bg", required_argument, nullptr, O_BG}, {"work-scale", required_argument, nullptr, O_WORK},
         {"history-s", required_argument, nullptr, O_HISTORY},
+        {"absorb-s", required_argument, nullptr, O_ABSORB},
         {"bootstrap-s", required_argument, nullptr, O_BOOT}, {"no-gain-compensation", no_argument, nullptr, O_NO_GAIN}, {"var-threshold", required_argument, nullptr, O_VAR},
         {"no-shadows", no_argument, nullptr, O_NO_SHADOWS},
         {"min-person-fraction", required_argument, nullptr, O_MINFRAC},
@@ -232,6 +237,10 @@ int main(int argc, char **argv)
         case O_HISTORY:
             if (!parse_double(optarg, &dv) || dv <= 0 || dv > 36000) fail("--history-s must be in (0, 36000]");
             cfg.history_s = dv;
+            break;
+        case O_ABSORB:
+            if (!parse_double(optarg, &dv) || dv < 0 || dv > 36000) fail("--absorb-s must be in [0, 36000]");
+            cfg.absorb_s = dv;
             break;
         case O_BOOT:
             if (!parse_double(optarg, &dv) || dv < 0 || dv > 40) fail("--bootstrap-s must be in [0, 40]");

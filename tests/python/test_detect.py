@@ -339,3 +339,39 @@ def test_masks_larger_than_the_daemon_accepts_are_warned(tmp_path):
     assert big.returncode == 0 and big.stderr.count("MVT_MAX_MASK_PIXELS") == 1, big.stderr
     ok = run(*base)
     assert ok.returncode == 0 and "warning" not in ok.stderr, ok.stderr
+
+
+def still_person_seen(tmp_path: Path, *extra: str) -> tuple[float, float]:
+    """A person stands still for 10 s in camera 0 of the smart room, with a 20 s background memory
+    (fading after about 2 s): the share of frames in which their head is detected (within 6 px)
+    in their first second and in their last two seconds."""
+    rig = smartroom_rig(tmp_path)
+    cam = rig.cameras[0]
+    rng = np.random.default_rng(5)
+    bg = background(rng)
+    frames, top = [], None
+    for i in range(60 + 250):
+        img = bg.copy()
+        if i >= 60:
+            top = draw_person(img, cam, 3.0, 2.5, 1.75, (40, 160, 60))
+        img += rng.normal(0, 2.0, img.shape).astype(np.float32)
+        frames.append(np.clip(img, 0, 255).astype(np.uint8))
+    path = tmp_path / "still.avi"
+    write_video(path, frames)
+    msgs = detect_log(tmp_path, tmp_path / "rig.yaml", {cam.name: path}, "--history-s", "20", *extra)
+    seen = [any(np.hypot(d.u - top[0], d.v - top[1]) < 6.0 for d in m.detections) for m in msgs[60:]]
+    return float(np.mean(seen[3:25])), float(np.mean(seen[-50:]))
+
+
+@pytest.mark.accuracy
+def test_person_standing_still_kept_for_absorb_s(tmp_path):
+    """The background memory alone (--absorb-s 0) lets a person standing still fade (the 20 s
+    memory: gone within 10 s); by default (--absorb-s 120) their pixels stay out of the
+    background's learning for 2 min (seen to the end), and a short --absorb-s (2 s) lets them go
+    after it, as a moved chair should."""
+    first, last = still_person_seen(tmp_path, "--absorb-s", "0")
+    assert first > 0.9 and last < 0.2, (first, last)
+    first, last = still_person_seen(tmp_path)
+    assert first > 0.9 and last > 0.9, (first, last)
+    first, last = still_person_seen(tmp_path, "--absorb-s", "2")
+    assert first > 0.9 and last < 0.2, (first, last)
