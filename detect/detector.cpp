@@ -366,9 +366,10 @@ void Detector::process(const cv::Mat &bgr, Result &out)
     }
     frames_++;
     const double rate = cfg_.learning_rate >= 0.0 ? cfg_.learning_rate : 1.0 / history_frames_;
-    if (cfg_.absorb_s > 0.0) {
+    if (cfg_.absorb_s > 0.0 && cfg_.model == BgModel::mog2) {
         /* selective update: classify without learning, then learn a frame in which the pixels
-         * foreground for less than absorb_s show the background's own colour */
+         * foreground for less than absorb_s show the background's own colour (MOG2 only: KNN's
+         * background image is not its model's, and fed back it found no one on vtest.avi) */
         bg_->apply(small_, fg_raw_, 0.0);
         if (fg_age_.size() != small_.size()) {
             fg_age_ = cv::Mat::zeros(small_.size(), CV_32S);

@@ -56,8 +56,8 @@ struct Config {
                                       * learnt as the background's own colour there, not as its
                                       * colour now, so a person standing still stays foreground that
                                       * long, and a moved chair joins the background after it
-                                      * (selective update); 0: every pixel is learnt, and anything
-                                      * still fades after about a tenth of history_s */
+                                      * (selective update, MOG2 only); 0: every pixel is learnt,
+                                      * and anything still fades after about a tenth of history_s */
     double bootstrap_s = 2.0;        /* the model starts from the per-pixel median of the first
                                       * frames (people walking through are not in it); no blobs
                                       * meanwhile. OpenCV's own start (rate 1/frames until `history`)
