@@ -381,7 +381,7 @@ void Detector::process(const cv::Mat &bgr, Result &out)
             int32_t *a = fg_age_.ptr<int32_t>(y);
             uint8_t *p = protect_.ptr<uint8_t>(y);
             for (int x = 0; x < small_.cols; x++) {
-                a[x] = f[x] == 255 ? a[x] + 1 : 0;
+                a[x] = f[x] == 255 ? std::min(a[x] + 1, absorb_frames) : 0; /* saturates: no overflow in months */
                 p[x] = (uint8_t)(f[x] == 255 && a[x] < absorb_frames ? 255 : 0);
             }
         }
