@@ -11,7 +11,7 @@ import pytest
 from mvtrack_tools.crowd import DetectorModel, crowd_scene, detect
 from mvtrack_tools.flood import score, write_flood_log
 from mvtrack_tools.lcmio import LogWriter, TrackLog, camera_frame, ground_truth, read_log
-from mvtrack_tools.mot import clear_mot, identity_switches, ospa, pair_frames, switch_kinds
+from mvtrack_tools.mot import as_dict, clear_mot, identity_switches, ospa, pair_frames
 from mvtrack_tools.rig import random_rig, smartroom
 from mvtrack_tools.simulate import T0_UTIME, build_multi, write_multi
 
@@ -79,9 +79,10 @@ def test_identity_switches_classified_by_how_they_came_about():
     sw, runs = identity_switches(frames)
     got = [(s.frame, s.person, s.old_track, s.new_track, s.kind, s.was_following) for s in sw]
     assert got == [(40, 1, 10, 20, "took", 2), (40, 2, 20, 30, "born", None), (80, 2, 30, 10, "passed", 1)]
-    assert len(sw) == clear_mot(frames).id_switches
-    assert switch_kinds(frames) == {"switches_born": 1, "switches_took": 1, "switches_passed": 1,
-                                    "switches_returned": 0, "switches_ghost": 0}
+    m = clear_mot(frames)
+    assert len(sw) == m.id_switches
+    assert {k: v for k, v in as_dict(m).items() if k.startswith("switches_")} == {
+        "switches_born": 1, "switches_took": 1, "switches_passed": 1, "switches_returned": 0, "switches_ghost": 0}
     assert runs[1] == [(10, 0, 39), (20, 40, 99)]
     assert runs[2] == [(20, 0, 39), (30, 40, 79), (10, 80, 99)]
     # person 1 is missed, born again as 11, given back their own 10; then 12, a track that has

@@ -26,7 +26,7 @@ from collections import Counter
 from dataclasses import asdict
 
 from .lcmio import read_log
-from .mot import clear_mot, identity_switches, pair_frames
+from .mot import SWITCH_KINDS, clear_mot, identity_switches, pair_frames
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -59,7 +59,7 @@ def main(argv: list[str] | None = None) -> int:
         was = f" (it was following person {s.was_following})" if s.was_following is not None else ""
         print(f"{(s.utime - t0) * 1e-6:7.2f} s  person {s.person}: track {s.old_track} -> {s.new_track}  {s.kind}{was}")
     kinds = Counter(s.kind for s in switches)
-    print(f"{len(switches)} switches: " + ", ".join(f"{kinds[k]} {k}" for k in ("born", "took", "passed", "returned", "ghost")))
+    print(f"{len(switches)} switches: " + ", ".join(f"{kinds[k]} {k}" for k in SWITCH_KINDS))
     for o, r in sorted(runs.items()):
         print(f"person {o}: " + " ".join(f"{'missed' if h is None else h}[{a_}-{b}]" for h, a_, b in r))
     print(f"MOTA {m.mota:.3f}, IDF1 {m.idf1:.3f}, {m.id_switches} switches")

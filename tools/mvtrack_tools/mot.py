@@ -21,6 +21,7 @@ from scipy.optimize import linear_sum_assignment
 from .lcmio import TrackLog
 
 MATCH_M = 0.5
+SWITCH_KINDS = ("born", "took", "passed", "returned", "ghost")  # identity_switches
 OSPA_C_M = 0.5
 OSPA_P = 2.0
 CONFIRMED, COASTING = 2, 3
@@ -36,6 +37,13 @@ class FrameSet:
     have_tracks: bool       # a TRACKS message matched this frame
 
 
+def nearest_time(utimes: np.ndarray, u: int) -> int:
+    """Index of the time in sorted, non-empty `utimes` nearest to u."""
+    i = int(np.searchsorted(utimes, u))
+    cands = [j for j in (i - 1, i) if 0 <= j < len(utimes)]
+    return min(cands, key=lambda j: abs(int(utimes[j]) - u))
+
+
 def pair_frames(scene: TrackLog, tracks: TrackLog, frame_rate: float = 25.0) -> list[FrameSet]:
     half = 0.5e6 / frame_rate
     t_utimes = np.array(sorted(tracks.tracks), dtype=np.int64)
@@ -44,10 +52,7 @@ def pair_frames(scene: TrackLog, tracks: TrackLog, frame_rate: float = 25.0) -> 
         ids, pos = scene.gt[u]
         hyp_ids, hyp_pos, have = [], [], False
         if len(t_utimes):
-            i = int(np.searchsorted(t_utimes, u))
-            cands = [j for j in (i - 1, i) if 0 <= j < len(t_utimes)]
-            j = min(cands, key=lambda j: abs(int(t_utimes[j]) - u))
-            tu = int(t_utimes[j])
+            tu = int(t_utimes[nearest_time(t_utimes, u)])
             if abs(tu - u) <= half:
                 have = True
                 dt = (u - tu) * 1e-6
@@ -129,28 +134,43 @@ class MotResult:
     ospa_m: float
     frames_without_tracks: int  # GROUND_TRUTH frames with no TRACKS message in time
     track_ids: int              # distinct confirmed identities the tracker used
+    switches_born: int = 0      # the id_switches by kind (identity_switches)
+    switches_took: int = 0
+    switches_passed: int = 0
+    switches_returned: int = 0
+    switches_ghost: int = 0
+
+
+def _accumulate(frames: list[FrameSet]):
+    """motmetrics' accumulator of the frames' matching (0.5 m): one for every score of a run."""
+    import motmetrics as mm
+
+    acc = mm.MOTAccumulator(auto_id=True)
+    for fs in frames:
+        acc.update(fs.gt_ids, fs.hyp_ids, distance_matrix(fs.gt_pos, fs.hyp_pos))
+    return acc
 
 
 def clear_mot(frames: list[FrameSet]) -> MotResult:
     import motmetrics as mm
 
-    acc = mm.MOTAccumulator(auto_id=True)
-    ospas = []
+    acc = _accumulate(frames)
+    ospas = [ospa(fs.gt_pos, fs.hyp_pos) for fs in frames]
     ids_seen: set[int] = set()
     for fs in frames:
-        acc.update(fs.gt_ids, fs.hyp_ids, distance_matrix(fs.gt_pos, fs.hyp_pos))
-        ospas.append(ospa(fs.gt_pos, fs.hyp_pos))
         ids_seen.update(fs.hyp_ids)
     mh = mm.metrics.create()
     names = ["num_frames", "num_unique_objects", "num_objects", "mota", "motp", "num_switches", "idf1",
              "num_false_positives", "num_misses", "num_fragmentations", "mostly_tracked"]
     s = mh.compute(acc, metrics=names, name="all")
     g = lambda k: s[k].iloc[0]  # noqa: E731
+    sw, _ = identity_switches(frames, acc=acc)
+    kinds = {f"switches_{k}": sum(1 for x in sw if x.kind == k) for k in SWITCH_KINDS}
     return MotResult(int(g("num_frames")), int(g("num_unique_objects")), int(g("num_objects")), float(g("mota")),
                      float(g("motp")) * 1e3, int(g("num_switches")), float(g("idf1")), int(g("num_false_positives")),
                      int(g("num_misses")), int(g("num_fragmentations")), int(g("mostly_tracked")),
                      float(np.mean(ospas)) if ospas else float("nan"),
-                     sum(1 for f in frames if not f.have_tracks), len(ids_seen))
+                     sum(1 for f in frames if not f.have_tracks), len(ids_seen), **kinds)
 
 
 def as_dict(r: MotResult) -> dict:
@@ -174,15 +194,14 @@ class Switch:
     was_following: int | None  # "took", "passed": the person the new track followed before
 
 
-def identity_switches(frames: list[FrameSet], young_s: float = 1.0) -> tuple[list[Switch], dict[int, list]]:
-    """The switches of clear_mot's matching, each classified (Switch.kind), and per person the runs
-    of the identities that covered them: {person: [(track or None while missed, first, last frame)]}."""
-    import motmetrics as mm
-
-    acc = mm.MOTAccumulator(auto_id=True)
+def identity_switches(frames: list[FrameSet], young_s: float = 1.0, acc=None) -> tuple[list[Switch], dict[int, list]]:
+    """The switches of clear_mot's matching (its accumulator, when given), each classified
+    (Switch.kind), and per person the runs of the identities that covered them:
+    {person: [(track or None while missed, first, last frame)]}."""
+    if acc is None:
+        acc = _accumulate(frames)
     first_seen: dict[int, int] = {}
     for i, fs in enumerate(frames):
-        acc.update(fs.gt_ids, fs.hyp_ids, distance_matrix(fs.gt_pos, fs.hyp_pos))
         for h in fs.hyp_ids:
             first_seen.setdefault(h, i)
     utimes = [fs.utime for fs in frames]
@@ -221,11 +240,3 @@ def identity_switches(frames: list[FrameSet], young_s: float = 1.0) -> tuple[lis
         had[o] = h
     return out, {o: [tuple(x) for x in r] for o, r in runs.items()}
 
-
-SWITCH_KINDS = ("born", "took", "passed", "returned", "ghost")
-
-
-def switch_kinds(frames: list[FrameSet]) -> dict[str, int]:
-    """The identity switches counted by kind (identity_switches), as summary keys switches_<kind>."""
-    sw, _ = identity_switches(frames)
-    return {f"switches_{k}": sum(1 for s in sw if s.kind == k) for k in SWITCH_KINDS}

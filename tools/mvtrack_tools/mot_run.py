@@ -25,7 +25,7 @@ from .progress import bar as progress_bar
 from . import plots
 from .experiment1 import run_daemon
 from .lcmio import LogWriter, read_log
-from .mot import as_dict, clear_mot, covered_only, pair_frames, switch_kinds, views_per_person
+from .mot import as_dict, clear_mot, covered_only, pair_frames, views_per_person
 from .paths import DAEMON
 from .rig import random_rig, smartroom
 from .simulate import build_multi, write_multi
@@ -77,7 +77,6 @@ def run_one(out: Path, kind: str, seed: int, merges: list[str], plot: bool, extr
         tr = read_log(str(trk_path), lambda c: c in ("TRACKS", "MVTRACK_STATUS"))
         fr = pair_frames(sc, tr, rig.frame_rate)
         r = as_dict(clear_mot(fr))
-        r.update(switch_kinds(fr))
         views = views_per_person(rig, fr)
         n_gt = sum(len(v) for v in views)
         cov = clear_mot(covered_only(fr, views))

@@ -36,7 +36,7 @@ import numpy as np
 from .crowd import DetectorModel, crowd_scene, interaction_scene
 from .experiment1 import run_daemon
 from .lcmio import LogWriter, mt, read_log
-from .mot import as_dict, clear_mot, pair_frames, switch_kinds
+from .mot import as_dict, clear_mot, pair_frames
 from .mot_run import run_scenes
 from .render import Renderer, write_rendered
 from .rig import smartroom
@@ -116,9 +116,7 @@ def run_one(out: Path, kind: str, seed: int, plot: bool, runs: list[str], daemon
         run_daemon(out / "rig.yaml", log, trk, mode, Q,
                    extra + list(daemon_args) + (["--publish-particles", "200"] if mode != "pkf" else []))
         tr = read_log(str(trk), lambda c: c in ("TRACKS", "MVTRACK_STATUS"))
-        fr = pair_frames(gt, tr, rig.frame_rate)
-        r = as_dict(clear_mot(fr))
-        r.update(switch_kinds(fr))
+        r = as_dict(clear_mot(pair_frames(gt, tr, rig.frame_rate)))
         r.update(head_stats(gt, tr))
         r.update(scene=kind, seed=seed, run=name, **{f"sim_{k}": v for k, v in stats.items()})
         rows.append(r)

@@ -34,7 +34,7 @@ from .crowd import DetectorModel, crowd_scene, interaction_scene
 from .detect import run as run_detect
 from .experiment1 import run_daemon
 from .lcmio import LogWriter, read_log
-from .mot import as_dict, clear_mot, pair_frames, switch_kinds
+from .mot import as_dict, clear_mot, pair_frames
 from .detect import DETECT
 from .paths import DAEMON
 from .pf_run import head_stats
@@ -201,9 +201,7 @@ def main(argv: list[str] | None = None) -> int:
                     trk = d / f"tracks_{mode}.lcm"
                     run_daemon(rig_path, det, trk, mode, Q, shlex.split(a.daemon_args))
                     tr = read_log(str(trk), lambda c: c in ("TRACKS", "MVTRACK_STATUS"))
-                    fr = pair_frames(gt, tr, rig.frame_rate)
-                    r = as_dict(clear_mot(fr))
-                    r.update(switch_kinds(fr))
+                    r = as_dict(clear_mot(pair_frames(gt, tr, rig.frame_rate)))
                     r.update(head_stats(gt, tr))
                     r.update(rig=rig_seed, scene=kind, seed=seed, mode=mode, detect_s=round(det_s, 1), **info)
                     rows.append(r)

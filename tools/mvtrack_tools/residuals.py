@@ -27,6 +27,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from .lcmio import mt, read_log
+from .mot import nearest_time
 from .rig import Rig
 
 CONFIRMED = 2
@@ -83,8 +84,7 @@ def residuals(rig: Rig, detections_path: str, ref_log, truth: bool, radius_px: f
             continue
         cam = rig.cameras[names.index(m.camera)]
         messages[m.camera] += 1
-        i = int(np.clip(np.searchsorted(us, m.utime), 1, len(us) - 1)) if len(us) > 1 else 0
-        j = i if len(us) == 1 or abs(us[i] - m.utime) < abs(us[i - 1] - m.utime) else i - 1
+        j = nearest_time(us, int(m.utime))
         if abs(int(us[j]) - int(m.utime)) > max_dt_us:
             continue
         pos, vel = refs[j]
