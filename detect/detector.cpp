@@ -385,7 +385,12 @@ void Detector::process(const cv::Mat &bgr, Result &out)
                 p[x] = (uint8_t)(f[x] == 255 && a[x] < absorb_frames ? 255 : 0);
             }
         }
-        bg_->getBackgroundImage(bg_img_);
+        /* the background's colour moves by 1/history a frame: its image, a pass over every
+         * mixture, is taken once a second, not every frame */
+        const int64_t refresh = std::max<int64_t>(1, std::llround(cfg_.frame_rate));
+        if (bg_img_.empty() || frames_ % refresh == 0) {
+            bg_->getBackgroundImage(bg_img_);
+        }
         small_.copyTo(learn_);
         if (bg_img_.size() == learn_.size() && bg_img_.type() == learn_.type()) {
             bg_img_.copyTo(learn_, protect_);
