@@ -84,8 +84,10 @@ typedef struct mvt_tracker_config {
     int seen_min_views;         /* a frame "sees" a track (a hit for confirmation; keeps it alive)
                                    when at least this many cameras updated it (capped at the rig's
                                    camera count), or one camera did and its position std is still
-                                   below seen_max_std_m on every axis: a lost track fed by one
-                                   camera's clutter must not live on; >= 1, default 2 */
+                                   below seen_max_std_m on every axis, or every observed camera
+                                   whose picture holds the head did (where fewer cameras reach):
+                                   a lost track fed by one camera's clutter must not live on where
+                                   others should see it; >= 1, default 2 */
     mvt_real seen_max_std_m;    /* >= 0, default 0 (off: one view can drag a track along its ray
                                    while the std across the ray stays small) */
     int confirm_hits;           /* M of the last confirm_window frames seen -> confirmed; 3 */
@@ -283,6 +285,7 @@ typedef struct mvt_track {
     uint32_t cameras_uncovered; /* this frame: cameras in whose picture the track's place is in no
                                    blob another track took (occlusion on, views with boxes only) */
     uint32_t cameras_empty;     /* this frame: ... in no blob at all (evidence against the track) */
+    uint32_t cameras_visible;   /* this frame: observed cameras whose picture holds the predicted head */
     uint32_t hit_history;       /* bit 0: this frame had an update, bit 1: previous, ... */
     int32_t misses;             /* consecutive frames not seen (seen_min_views) */
     int64_t last_update_us;     /* last frame seen */

@@ -172,6 +172,10 @@ static int hypothesise(mvt_tracker_t *self, const mvt_view_t *view, int k, const
         self->merge_wide[t] = 0;
         const mvt_err_t err = mvt_pkf_predict_obs(&self->tracks[t].s, cam, lin, &self->pred[t]);
         self->pred_ok[t] = err == MVT_OK && in_picture(cam, &self->pred[t]);
+        if (self->pred_ok[t] && self->pred[t].h[0] >= MVT_R(0.0) && self->pred[t].h[1] >= MVT_R(0.0) &&
+            self->pred[t].h[0] <= (mvt_real)cam->width && self->pred[t].h[1] <= (mvt_real)cam->height) {
+            self->tracks[t].cameras_visible |= 1u << k;
+        }
         if (err == MVT_OK && !self->pred_ok[t]) {
             self->counters.outside_picture++;
         } else if (err == MVT_ERR_BEHIND) {

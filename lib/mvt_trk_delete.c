@@ -2,7 +2,8 @@
  * mvt_trk_delete.c - confirmation and deletion of the tracker loop.
  *
  * A frame "sees" a track when at least seen_min_views cameras updated it, or one did and the
- * position is still well determined (seen_max_std_m). A tentative track is
+ * position is still well determined (seen_max_std_m), or every camera whose picture holds its head
+ * updated it (a person where fewer than seen_min_views cameras reach). A tentative track is
  * confirmed after confirm_hits seen frames among the last confirm_window
  * and deleted after tentative_max_misses consecutive misses. A confirmed track that no camera
  * updated this frame is COASTING; it is deleted once unseen for coast_max_s (or, hidden in other
@@ -102,14 +103,25 @@ void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us)
         const int refuted = tr->cameras_empty != 0u &&
                             mvt_trk_odds(self, tr->cameras_used, mvt_trk_popcount(tr->cameras_empty)) < MVT_R(0.0);
         hit = hit && !refuted;
+        /* placed in 3D: the height it was seen at (seen_z) is what mvt_trk_hold_height holds */
+        const int placed = hit;
+        /* every camera whose picture holds the head updated the track: one view then sees it all
+         * the same (a person where a single camera reaches, the height held to seen_z fixing the
+         * point on its ray) */
+        if (!hit && views >= 1 && !refuted && tr->cameras_visible != 0u &&
+            mvt_trk_popcount(tr->cameras_visible | tr->cameras_used) <= views) {
+            hit = 1;
+        }
         tr->hit_history = (tr->hit_history << 1) | (hit ? 1u : 0u);
         const int contradicted = refuted || (!hit && mvt_trk_popcount(tr->cameras_uncovered) >= c->contra_views);
         if (!contradicted) {
             tr->last_consistent_us = now_us;
         }
-        if (hit) {
+        if (placed) {
             tr->seen_z = tr->s.x[2];
             tr->seen_zz = tr->s.P[14];
+        }
+        if (hit) {
             tr->misses = 0;
             tr->last_update_us = now_us;
             tr->last_explained_us = now_us;

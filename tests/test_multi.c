@@ -1166,6 +1166,103 @@ static void test_mvt_tracker_step_camera_that_cannot_see_does_not_update(void **
     assert_true(g_tracker.counters.outside_picture > 50);
 }
 
+/* The room's corner camera 0 and its zenith camera as a two-camera rig; a person at y (x 3.0 m,
+ * head 1.72 m) reported by every camera whose picture holds the head (sd 2 px, no boxes), except
+ * the zenith camera when silent. Returns whether the zenith camera sees x. */
+static mvt_camera_t g_two[2];
+
+static int two_camera_frame(double y, int64_t utime, test_rng_t *rng, int zenith_silent)
+{
+    const mvt_real X[3] = {3.0f, (mvt_real)y, 1.72f};
+    empty_frame(utime);
+    for (int k = 2; k < 5; k++) {
+        g_frame.views[k].observed = 0;
+    }
+    int zenith_sees = 0;
+    for (int k = 0; k < 2; k++) {
+        mvt_real uv[2];
+        if (mvt_cam_project(&g_two[k], X, uv, NULL) != MVT_OK || uv[0] < 0 || uv[1] < 0 || uv[0] > 767 ||
+            uv[1] > 575) {
+            continue;
+        }
+        zenith_sees |= k == 1;
+        if (k == 1 && zenith_silent) {
+            continue;
+        }
+        mvt_detection_t *d = &g_frame.views[k].det[g_frame.views[k].num_detections++];
+        d->u = uv[0] + (mvt_real)(2.0 * test_normal(rng));
+        d->v = uv[1] + (mvt_real)(2.0 * test_normal(rng));
+        d->sigma_px = 2;
+        d->score = 1;
+        d->hue = d->saturation = -1;
+    }
+    return zenith_sees;
+}
+
+/* Where one camera reaches. A person born where both cameras see them (the room's middle) walks at
+ * 0.76 m/s to y = 4.4 m, where the zenith camera's field has ended (at 4.0 m), stands there 4 s (twice
+ * coast_max_s) and walks back. Every camera whose picture holds the head reports it, so one view
+ * there sees the track all the same: one identity throughout, within 0.25 m (the height held to
+ * what two views measured fixes the point on the corner camera's ray). The guard: where the
+ * zenith camera's picture holds the head and it reports nothing for 3 s, the corner camera's
+ * detections alone do not keep the track (deleted at coast_max_s, as ever). */
+static void test_mvt_tracker_step_person_where_one_camera_reaches_kept(void **state)
+{
+    (void)state;
+    assert_int_equal(test_room_cameras(g_cams, 1), 0);
+    g_two[0] = g_cams[0];
+    g_two[1] = g_cams[4];
+    mvt_tracker_config_t cfg;
+    mvt_tracker_config_default(&cfg);
+    cfg.volume_min[0] = 0; cfg.volume_min[1] = 0; cfg.volume_min[2] = 0;
+    cfg.volume_max[0] = 6; cfg.volume_max[1] = 5; cfg.volume_max[2] = 2.5f;
+    assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, g_two, 2), MVT_OK);
+    test_rng_t rng = {23};
+    int64_t t = 1000000;
+    int32_t id = 0;
+    int one_view_frames = 0;
+    double worst = 0.0;
+    for (int f = 0; f < 325; f++, t += 40000) {
+        const double s = f * 0.04; /* 1 s still, 2.5 s out, 4 s still, 2.5 s back, 3 s still */
+        double y = 2.5;
+        if (s > 1.0 && s <= 3.5) {
+            y = 2.5 + 0.76 * (s - 1.0);
+        } else if (s > 3.5 && s <= 7.5) {
+            y = 4.4;
+        } else if (s > 7.5 && s <= 10.0) {
+            y = 4.4 - 0.76 * (s - 7.5);
+        }
+        const int zenith_sees = two_camera_frame(y, t, &rng, 0);
+        assert_int_equal(mvt_tracker_step(&g_tracker, &g_frame, &g_out), MVT_OK);
+        const mvt_real X[3] = {3.0f, (mvt_real)y, 1.72f};
+        if (f == 20) {
+            id = id_near(X);
+            assert_true(id > 0);
+        }
+        if (f > 20) {
+            const mvt_track_out_t *o = find_id(id);
+            assert_non_null(o);
+            assert_int_equal(g_out.num_tracks, 1);
+            const double e = dist3(o->pos_m, X);
+            worst = e > worst ? e : worst;
+            one_view_frames += !zenith_sees;
+        }
+    }
+    assert_true(one_view_frames > 100); /* the 4 s at y = 4.4 m at least */
+    assert_true(worst < 0.25);
+    assert_int_equal(g_tracker.counters.deletions, 0);
+    /* the guard: at y = 3.0 m the zenith camera sees the head; it goes silent */
+    int gone_after = -1;
+    for (int g = 0; g < 100; g++, t += 40000) {
+        assert_int_equal(two_camera_frame(2.5 + 0.02 * (g < 25 ? g : 25), t, &rng, g >= 25), 1);
+        assert_int_equal(mvt_tracker_step(&g_tracker, &g_frame, &g_out), MVT_OK);
+        if (gone_after < 0 && g >= 25 && find_id(id) == NULL) {
+            gone_after = g - 25;
+        }
+    }
+    assert_true(gone_after >= 45 && gone_after <= 56); /* coast_max_s = 2 s */
+}
+
 static void test_mvt_tracker_select_under_capacity_keeps_all_in_order(void **state)
 {
     (void)state;
@@ -1218,6 +1315,7 @@ int main(void)
         cmocka_unit_test(test_mvt_tracker_step_vanished_person_contradicted_deleted),
         cmocka_unit_test(test_mvt_tracker_step_ghost_two_views_refuted_by_three),
         cmocka_unit_test(test_mvt_tracker_step_camera_that_cannot_see_does_not_update),
+        cmocka_unit_test(test_mvt_tracker_step_person_where_one_camera_reaches_kept),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
