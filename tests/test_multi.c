@@ -282,11 +282,12 @@ static void test_mvt_tracker_step_lost_tracks_reacquired_by_height(void **state)
 }
 
 /* Two people walk up to each other and stand talking, heads 0.29 m apart, for 6 s, seen by a
- * detector that reports both heads (merged_blobs 0): both tracks live on under their identities,
- * neither deleted as the other's duplicate (dup_dist_m 0.25 m), each within 0.2 m of its person.
- * With a top-of-blob detector that merges them (merged_blobs 1) this does not hold yet: the hidden
- * shorter person's height sinks to the floor in 3 s and the track is deleted as outside the
- * volume (README, Known limits). */
+ * detector that reports both heads (merged_blobs 0), or by a top-of-blob detector that merges them
+ * into one blob in every view, its top the taller head (merged_blobs 1): both tracks live on under
+ * their identities, neither deleted as the other's duplicate (dup_dist_m 0.25 m), each within 0.2 m
+ * of its person. With merged blobs the shorter person is hidden in every view: the track lives on
+ * the blobs' boxes (occlusion) and the height two views last measured (hold_height); its height
+ * used to sink to the floor in 3 s. */
 static void close_pair(int merged_blobs)
 {
     init();
@@ -328,6 +329,12 @@ static void test_mvt_tracker_step_close_pair_both_kept(void **state)
 {
     (void)state;
     close_pair(0);
+}
+
+static void test_mvt_tracker_step_close_pair_merged_blobs_both_kept(void **state)
+{
+    (void)state;
+    close_pair(1);
 }
 
 /* Two confirmed tracks end up on one person: the older one was pulled there (along one view's ray,
@@ -1298,6 +1305,7 @@ int main(void)
         cmocka_unit_test(test_mvt_tracker_step_coasting_track_does_not_take_passer_by),
         cmocka_unit_test(test_mvt_tracker_step_lost_tracks_reacquired_by_height),
         cmocka_unit_test(test_mvt_tracker_step_close_pair_both_kept),
+        cmocka_unit_test(test_mvt_tracker_step_close_pair_merged_blobs_both_kept),
         cmocka_unit_test(test_mvt_tracker_duplicates_placed_track_kept),
         cmocka_unit_test(test_mvt_trk_existence_chain_forgets_never_flips),
         cmocka_unit_test(test_mvt_tracker_contradicted_track_gives_identity_to_rebirth),
