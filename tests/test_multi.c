@@ -287,11 +287,11 @@ static void test_mvt_tracker_step_lost_tracks_reacquired_by_height(void **state)
  * their identities, neither deleted as the other's duplicate (dup_dist_m 0.25 m), each within 0.2 m
  * of its person. With merged blobs the shorter person is hidden in every view: the track lives on
  * the blobs' boxes (occlusion) and the height two views last measured (hold_height); its height
- * used to sink to the floor in 3 s. */
-static void close_pair(int merged_blobs)
+ * used to sink to the floor in 3 s. Five noise seeds (29 of 30 pass in a longer scratch loop). */
+static void close_pair(int merged_blobs, unsigned long long seed)
 {
     init();
-    test_rng_t rng = {23};
+    test_rng_t rng = {seed};
     int64_t t = 1000000;
     int32_t id_a = 0, id_b = 0;
     for (int f = 0; f < 200; f++, t += 40000) {
@@ -328,13 +328,15 @@ static void close_pair(int merged_blobs)
 static void test_mvt_tracker_step_close_pair_both_kept(void **state)
 {
     (void)state;
-    close_pair(0);
+    close_pair(0, 23);
 }
 
 static void test_mvt_tracker_step_close_pair_merged_blobs_both_kept(void **state)
 {
     (void)state;
-    close_pair(1);
+    for (unsigned long long k = 1; k <= 5; k++) { /* without the held height 4 of these 5 fail */
+        close_pair(1, 7919 * k);
+    }
 }
 
 /* Two confirmed tracks end up on one person: the older one was pulled there (along one view's ray,
