@@ -285,7 +285,6 @@ typedef struct mvt_track {
     uint32_t cameras_uncovered; /* this frame: cameras in whose picture the track's place is in no
                                    blob another track took (occlusion on, views with boxes only) */
     uint32_t cameras_empty;     /* this frame: ... in no blob at all (evidence against the track) */
-    uint32_t cameras_visible;   /* this frame: observed cameras whose picture holds the predicted head */
     uint32_t hit_history;       /* bit 0: this frame had an update, bit 1: previous, ... */
     int32_t misses;             /* consecutive frames not seen (seen_min_views) */
     int64_t last_update_us;     /* last frame seen */
@@ -377,6 +376,8 @@ typedef struct mvt_tracker {
     mvt_real ev_clutter[MVT_MAX_CAMERAS];  /* clutter density: the view's detections (every one
                                               possibly clutter, at least one) per pixel^2 */
     mvt_real ev_llr[MVT_MAX_TARGETS];      /* this frame's existence evidence of each track */
+    uint32_t visible[MVT_MAX_TARGETS];     /* this frame: the observed cameras whose picture holds
+                                              each track's predicted head (mvt_trk_delete) */
     mvt_real birth_rate;        /* births tried per frame, averaged over MVT_TRK_BIRTH_RATE_S
                                    (mvt_trk_init.c: the prior odds of a new track) */
     int64_t birth_rate_us;      /* the frame it was last updated, 0: never */

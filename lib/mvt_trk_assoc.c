@@ -174,7 +174,7 @@ static int hypothesise(mvt_tracker_t *self, const mvt_view_t *view, int k, const
         self->pred_ok[t] = err == MVT_OK && in_picture(cam, &self->pred[t]);
         if (self->pred_ok[t] && self->pred[t].h[0] >= MVT_R(0.0) && self->pred[t].h[1] >= MVT_R(0.0) &&
             self->pred[t].h[0] <= (mvt_real)cam->width && self->pred[t].h[1] <= (mvt_real)cam->height) {
-            self->tracks[t].cameras_visible |= 1u << k;
+            self->visible[t] |= 1u << k;
         }
         if (err == MVT_OK && !self->pred_ok[t]) {
             self->counters.outside_picture++;
