@@ -111,8 +111,9 @@ void mvt_trk_lose(mvt_tracker_t *self, const mvt_track_t *tr, int64_t now_us);
 void mvt_trk_give_back(mvt_tracker_t *self, mvt_track_t *tr, int64_t now_us);
 int32_t mvt_trk_recover(mvt_tracker_t *self, const mvt_real x[3], const mvt_real cov[9], const mvt_app_obs_t *obs,
                         int64_t now_us, mvt_lost_t *held);
-/* Before a birth at x: a confirmed track that no camera placed this frame and whose place views
- * show empty (contradicted, not yet deleted) and which passes the record test for x is deleted
+/* Before a birth at x: a confirmed track that no camera placed this frame and whose place at least
+ * contra_views views show in no blob another track took (contradicted, not yet deleted; one view's
+ * empty place is as often one missed detection) and which passes the record test for x is deleted
  * into a record (counted as contradicted), unless a kept record is nearer; mvt_trk_recover then
  * gives its identity to the birth. Without it the birth came first and recovery could not act.
  * O(MVT_MAX_TARGETS + MVT_MAX_LOST). */
