@@ -108,8 +108,7 @@ void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us)
         /* every camera whose picture holds the head updated the track: one view then sees it all
          * the same (a person where a single camera reaches, the height held to seen_z fixing the
          * point on its ray) */
-        if (!hit && views >= 1 && !refuted && self->visible[t] != 0u &&
-            mvt_trk_popcount(self->visible[t] | tr->cameras_used) <= views) {
+        if (!hit && !refuted && self->visible[t] != 0u && (self->visible[t] & ~tr->cameras_used) == 0u) {
             hit = 1;
         }
         tr->hit_history = (tr->hit_history << 1) | (hit ? 1u : 0u);

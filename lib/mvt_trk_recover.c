@@ -174,10 +174,11 @@ void mvt_trk_release_contradicted(mvt_tracker_t *self, const mvt_real x[3], cons
     mvt_real best_score = MVT_R(0.0);
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         const mvt_track_t *tr = &self->tracks[t];
-        if (tr->id == 0 || tr->status == MVT_TRACK_TENTATIVE || tr->misses < 1 || tr->last_consistent_us >= now_us ||
+        if (tr->id == 0 || tr->status == MVT_TRACK_TENTATIVE || tr->misses < 1 ||
             mvt_trk_popcount(tr->cameras_uncovered) < self->cfg.contra_views) {
-            continue; /* tentative, placed this frame, or not contradicted by contra_views views (one
-                         view's empty place is one missed detection as often as a person gone) */
+            continue; /* tentative, seen this frame, or not contradicted by contra_views views as
+                         mvt_trk_delete has it (one view's empty place, which refutes a frame, is one
+                         missed detection as often as a person gone) */
         }
         mvt_lost_t r;
         record_of(tr, now_us, &r);

@@ -239,4 +239,3 @@ def identity_switches(frames: list[FrameSet], young_s: float = 1.0, acc=None) ->
         follows_f[h] = int(f)
         had[o] = h
     return out, {o: [tuple(x) for x in r] for o, r in runs.items()}
-
