@@ -228,7 +228,7 @@ void mvtd_handle(mvtd_t *d, const char *channel, const void *data, uint32_t size
     v->num_detections = kept;
     v->num_offered = n_in; /* the clutter density counts what was dropped too */
     v->mask = NULL;
-    if (d->pf && (m.mask_width != 0 || m.mask_height != 0)) {
+    if (m.mask_width != 0 || m.mask_height != 0) { /* every mode: the PKF reads empty places from it */
         v->mask = decode_mask(d, cam, &m);
     }
     mvtrack_camera_frame_t_decode_cleanup(&m);

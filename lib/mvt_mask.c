@@ -1,5 +1,6 @@
 #include "mvt_mask.h"
 
+#include <math.h>
 #include <string.h>
 
 static mvt_err_t reject(mvt_mask_t *mask)
@@ -61,4 +62,40 @@ mvt_err_t mvt_mask_from_runs(mvt_mask_t *mask, int image_width, int image_height
     mask->has_colour = n_hs != 0;
     mask->num_fg = num_fg;
     return MVT_OK;
+}
+
+/* The mask pixel range [lo, hi] that raw image coordinates [a - r, a + r] touch, clamped to
+ * [0, n - 1]; 0 when it misses. Clamped in mvt_real before the conversion, so no r overflows. */
+static int span(mvt_real a, mvt_real r, int scale, int n, int *lo, int *hi)
+{
+    const mvt_real s = (mvt_real)scale;
+    mvt_real l = (a - r) / s, h = (a + r) / s;
+    if (!(h >= MVT_R(0.0)) || !(l < (mvt_real)n)) {
+        return 0;
+    }
+    l = l > MVT_R(0.0) ? l : MVT_R(0.0);
+    h = h < (mvt_real)(n - 1) ? h : (mvt_real)(n - 1);
+    *lo = (int)l; /* l, h >= 0: the conversion truncates down */
+    *hi = (int)h;
+    return 1;
+}
+
+int mvt_mask_fg_near(const mvt_mask_t *mask, const mvt_real uv[2], mvt_real r)
+{
+    MVT_ASSERT(mask != NULL && uv != NULL);
+    int u0, u1, v0, v1;
+    if (mask->width < 1 || mask->height < 1 || mask->scale < 1 || !isfinite(uv[0]) || !isfinite(uv[1]) ||
+        !isfinite(r) || r < MVT_R(0.0) || !span(uv[0], r, mask->scale, mask->width, &u0, &u1) ||
+        !span(uv[1], r, mask->scale, mask->height, &v0, &v1)) {
+        return 0;
+    }
+    for (int v = v0; v <= v1; v++) {
+        const uint8_t *row = &mask->fg[(size_t)v * (size_t)mask->width];
+        for (int u = u0; u <= u1; u++) {
+            if (row[u] != 0u) {
+                return 1;
+            }
+        }
+    }
+    return 0;
 }

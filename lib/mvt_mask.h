@@ -35,6 +35,13 @@ mvt_err_t mvt_mask_from_runs(mvt_mask_t *mask, int image_width, int image_height
                              const int32_t *runs, int32_t n_runs, const uint8_t *hue, const uint8_t *sat,
                              int32_t n_hs);
 
+/* 1 when a foreground pixel lies within r raw image pixels of the image point uv along each axis
+ * (the square [u - r, u + r] x [v - r, v + r], at mask resolution the mask pixels it touches), 0
+ * when none does, when the square misses the mask, or when the mask is empty (0 x 0) or uv or r is
+ * not finite. The PKF's evidence that a person's place is empty in a view (mvt_trk_occl.c).
+ * O(r^2 / scale^2), stopping at the first foreground pixel. */
+int mvt_mask_fg_near(const mvt_mask_t *mask, const mvt_real uv[2], mvt_real r);
+
 #ifdef __cplusplus
 }
 #endif

@@ -176,7 +176,8 @@ typedef struct mvt_view {
                              so a flood's density must not be read from what was kept */
     mvt_detection_t det[MVT_MAX_DETECTIONS];
     const struct mvt_mask *mask; /* foreground mask and colour, or NULL; owned by the caller and
-                                    valid until the frame is processed (used by mvt_pft only) */
+                                    valid until the frame is processed. mvt_pft weighs its particles
+                                    by it; the PKF tracker reads from it whether a place is empty */
 } mvt_view_t;
 
 typedef struct mvt_frame {

@@ -31,11 +31,16 @@
  * nothing has needed or seen for occluded_max_s is deleted. Before, hidden life ended
  * occluded_max_s after the last frame seen, whatever the boxes said: four people queued for 20 s
  * along two cameras' axes lost two of them (random rig 12, docs/tracking.md).
+ *
+ * A place that nothing holds (no blob another track took, and nothing near the head at all) speaks
+ * against the track (mvt_trk_delete, mvt_trk_existence). "Nothing near" is read from the camera's
+ * foreground mask where it sent one, from the blobs' boxes otherwise (place_covered).
  */
 #include <math.h>
 #include <stddef.h>
 #include <string.h>
 
+#include "mvt_mask.h"
 #include "mvt_trk.h"
 
 /* A band holding less of the track's prior than this says the track is not hidden there. On 8
@@ -77,6 +82,25 @@ int mvt_trk_seen_heads(const mvt_tracker_t *self, int k, mvt_real heads[][4], in
     return n;
 }
 
+/* Does anything in view k hold the image point uv (slack_px either way)? Where the camera sent its
+ * foreground mask, the mask's pixels answer: a blob's box is a rectangle, and a merged or shadowed
+ * blob's box holds much background beside and between the people in it, where a ghost (two views'
+ * fragments meeting) or a track drifted off its person would find cover. Without a mask, any
+ * blob's box. */
+static int place_covered(const mvt_tracker_t *self, const mvt_view_t *view, int k, const mvt_real uv[2],
+                         mvt_real slack_px)
+{
+    if (view->mask != NULL && view->mask->width > 0) {
+        return mvt_mask_fg_near(view->mask, uv, slack_px);
+    }
+    for (int d = 0; d < self->num_meas[k]; d++) {
+        if (mvt_trk_in_box(view->det[d].box, uv, slack_px, slack_px)) {
+            return 1;
+        }
+    }
+    return 0;
+}
+
 mvt_trk_evidence_t mvt_trk_view_evidence(const mvt_tracker_t *self, const mvt_view_t *view, int k,
                                          const mvt_real x[3], mvt_real slack_px)
 {
@@ -86,12 +110,7 @@ mvt_trk_evidence_t mvt_trk_view_evidence(const mvt_tracker_t *self, const mvt_vi
         !(uv[0] <= (mvt_real)cam->width - slack_px) || !(uv[1] <= (mvt_real)cam->height - slack_px)) {
         return MVT_TRK_NO_INFO; /* out of the picture (or too near its border to say) */
     }
-    for (int d = 0; d < self->num_meas[k]; d++) {
-        if (mvt_trk_in_box(view->det[d].box, uv, slack_px, slack_px)) {
-            return MVT_TRK_COVERED;
-        }
-    }
-    return MVT_TRK_EMPTY;
+    return place_covered(self, view, k, uv, slack_px) ? MVT_TRK_COVERED : MVT_TRK_EMPTY;
 }
 
 mvt_real mvt_trk_birth_radius_px(const mvt_tracker_t *self, int k)
@@ -382,10 +401,7 @@ void mvt_trk_occlusion(mvt_tracker_t *self, const mvt_view_t *view, int k, const
         if (best < 0) {
             /* not seen, not hidden: is any blob at all near the head? */
             const mvt_real slack = empty_slack(cam, p);
-            int covered = 0;
-            for (int d = 0; d < nd && !covered; d++) {
-                covered = mvt_trk_in_box(view->det[d].box, p->h, slack, slack);
-            }
+            const int covered = place_covered(self, view, k, p->h, slack);
             /* existence (mvt_trk_existence): with none, the person was missed, if in the picture */
             if (!covered && su > MVT_R(0.0) && sv > MVT_R(0.0)) {
                 self->ev_llr[t] += MVT_LOG(MVT_R(1.0) - c->p_detect * in_picture(cam, p->h, su, sv));

@@ -8,6 +8,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "mvt_mask.h"
 #include "mvt_tracker.h"
 #include "mvt_trk.h"
 #include "test_support.h"
@@ -1141,6 +1142,91 @@ static void test_mvt_tracker_step_ghost_two_views_refuted_by_three(void **state)
     }
 }
 
+/* Camera k's foreground mask at quarter resolution: the rectangles box[0..n-1] (raw pixels). */
+static mvt_mask_t g_masks[5];
+
+static void mask_of_boxes(int k, const mvt_real (*box)[4], int n)
+{
+    mvt_mask_t *m = &g_masks[k];
+    memset(m, 0, sizeof(*m));
+    m->width = 192;
+    m->height = 144;
+    m->scale = 4;
+    for (int i = 0; i < n; i++) {
+        for (int v = 0; v < m->height; v++) {
+            for (int u = 0; u < m->width; u++) {
+                const mvt_real cu = (mvt_real)(4 * u + 2), cv = (mvt_real)(4 * v + 2); /* pixel centre */
+                if (cu >= box[i][0] && cu <= box[i][2] && cv >= box[i][1] && cv <= box[i][3] && !m->fg[v * 192 + u]) {
+                    m->fg[v * 192 + u] = 1;
+                    m->num_fg++;
+                }
+            }
+        }
+    }
+    g_frame.views[k].mask = m;
+}
+
+/* The ghost of the test above, where cameras 2-4's blobs' boxes also hold its place (a shadow, or
+ * people's merged blob spanning it, as a box does): the boxes no longer refute it, and it is
+ * confirmed. Where those cameras also send their foreground masks, which hold the two people's
+ * silhouettes only, the ghost's place is empty in three views and it is never confirmed. */
+static void test_mvt_tracker_step_ghost_in_boxes_refuted_by_masks(void **state)
+{
+    (void)state;
+    const mvt_real X[2][3] = {{1.2f, 1.0f, 1.75f}, {4.8f, 3.9f, 1.7f}};
+    const mvt_real G[3] = {3.0f, 2.6f, 1.7f};
+    for (int with_masks = 1; with_masks >= 0; with_masks--) {
+        init();
+        test_rng_t rng = {23};
+        int ghost_confirmed = 0;
+        for (int f = 0; f < 75; f++) {
+            frame_blobs(X, 2, 1000000 + f * 40000, &rng, 2.0, 1);
+            for (int k = 0; k < 5; k++) {
+                mvt_view_t *v = &g_frame.views[k];
+                mvt_real uv[2], c[3], boxes[MVT_MAX_DETECTIONS + 1][4];
+                assert_int_equal(mvt_cam_project(&g_cams[k], G, uv, NULL), MVT_OK);
+                mvt_cam_to_camera(&g_cams[k], G, c);
+                const mvt_real half = (mvt_real)0.22 * g_cams[k].fx / c[2];
+                const mvt_real gbox[4] = {uv[0] - half, uv[1] - half, uv[0] + half, uv[1] + 8 * half};
+                int nb = 0;
+                for (int d = 0; d < v->num_detections; d++, nb++) {
+                    memcpy(boxes[nb], v->det[d].box, sizeof(boxes[nb]));
+                }
+                if (k < 2) { /* the two views whose fragments meet at G */
+                    mvt_detection_t *d = &v->det[v->num_detections++];
+                    memset(d, 0, sizeof(*d));
+                    d->u = uv[0] + (mvt_real)(2.0 * test_normal(&rng));
+                    d->v = uv[1] + (mvt_real)(2.0 * test_normal(&rng));
+                    d->sigma_px = 2;
+                    d->score = 1;
+                    d->hue = d->saturation = -1;
+                    memcpy(d->box, gbox, sizeof(gbox));
+                    memcpy(boxes[nb++], gbox, sizeof(gbox));
+                } else { /* every box of the view widened over G's place: background in the mask */
+                    for (int d = 0; d < v->num_detections; d++) {
+                        for (int j = 0; j < 2; j++) {
+                            v->det[d].box[j] = v->det[d].box[j] < gbox[j] - half ? v->det[d].box[j] : gbox[j] - half;
+                            v->det[d].box[j + 2] = v->det[d].box[j + 2] > gbox[j + 2] + half ? v->det[d].box[j + 2]
+                                                                                             : gbox[j + 2] + half;
+                        }
+                    }
+                }
+                if (with_masks) {
+                    mask_of_boxes(k, (const mvt_real(*)[4])boxes, nb);
+                }
+            }
+            mvt_tracker_step(&g_tracker, &g_frame, &g_out);
+            ghost_confirmed += id_near(G) > 0;
+        }
+        assert_true(id_near(X[0]) > 0 && id_near(X[1]) > 0);
+        if (with_masks) {
+            assert_int_equal(ghost_confirmed, 0);
+        } else {
+            assert_true(ghost_confirmed > 50);
+        }
+    }
+}
+
 /* A person stands right under camera 0 (outside its picture, next to its focal plane), seen by the
  * other four; camera 0 sends a blob of someone else each frame. The prediction in camera 0 lies far
  * outside its picture with an image spread wider than the picture: camera 0 must not update the
@@ -1328,6 +1414,7 @@ int main(void)
         cmocka_unit_test(test_mvt_tracker_recovery_prefers_same_colour),
         cmocka_unit_test(test_mvt_tracker_step_vanished_person_contradicted_deleted),
         cmocka_unit_test(test_mvt_tracker_step_ghost_two_views_refuted_by_three),
+        cmocka_unit_test(test_mvt_tracker_step_ghost_in_boxes_refuted_by_masks),
         cmocka_unit_test(test_mvt_tracker_step_camera_that_cannot_see_does_not_update),
         cmocka_unit_test(test_mvt_tracker_step_person_where_one_camera_reaches_kept),
     };

@@ -36,6 +36,59 @@ static void test_mask_from_runs_valid_decodes(void **state)
     assert_false(g_mask.has_colour);
 }
 
+/* mvt_mask_fg_near against a brute-force reference over every foreground mask pixel (a mask pixel
+ * (i, j) covers raw [i s, (i + 1) s) x [j s, (j + 1) s); the square [u - r, u + r] x [v - r, v + r]
+ * touches it when the intervals meet), on sparse random masks at three scales and random squares,
+ * some reaching outside the picture; then the edges: empty mask, NaN, negative and huge r. */
+static void test_mask_fg_near_matches_brute_force(void **state)
+{
+    (void)state;
+    test_rng_t rng = {77};
+    static const int scales[3] = {1, 2, 4};
+    for (int si = 0; si < 3; si++) {
+        const int sc = scales[si], w = 96 / sc, h = 64 / sc;
+        int32_t runs[4096];
+        int n = 0, total = 0, val = 0;
+        while (total < w * h && n < 4095) { /* sparse: long background runs, short foreground ones */
+            int len = val ? 1 + (int)(test_uniform(&rng) * 3) : (int)(test_uniform(&rng) * 200);
+            len = total + len > w * h ? w * h - total : len;
+            runs[n++] = len;
+            total += len;
+            val ^= 1;
+        }
+        if (total < w * h) runs[n++] = w * h - total;
+        assert_int_equal(mvt_mask_from_runs(&g_mask, w * sc, h * sc, w, h, runs, n, NULL, NULL, 0), MVT_OK);
+        int hits = 0, misses = 0;
+        for (int q = 0; q < 3000; q++) {
+            const mvt_real uv[2] = {(mvt_real)(test_uniform(&rng) * 120.0 - 12.0),
+                                    (mvt_real)(test_uniform(&rng) * 88.0 - 12.0)};
+            const mvt_real r = (mvt_real)(test_uniform(&rng) * 10.0);
+            int want = 0;
+            for (int j = 0; j < h && !want; j++) {
+                for (int i = 0; i < w && !want; i++) {
+                    want = g_mask.fg[j * w + i] && (double)(i * sc) <= (double)uv[0] + (double)r &&
+                           (double)((i + 1) * sc) > (double)uv[0] - (double)r &&
+                           (double)(j * sc) <= (double)uv[1] + (double)r &&
+                           (double)((j + 1) * sc) > (double)uv[1] - (double)r;
+                }
+            }
+            assert_int_equal(mvt_mask_fg_near(&g_mask, uv, r), want);
+            hits += want;
+            misses += !want;
+        }
+        assert_true(hits > 300 && misses > 300); /* both answers exercised */
+        const mvt_real mid[2] = {48.0f, 32.0f}, nan_uv[2] = {NAN, 32.0f};
+        assert_int_equal(mvt_mask_fg_near(&g_mask, mid, 1e30f), g_mask.num_fg > 0);
+        assert_int_equal(mvt_mask_fg_near(&g_mask, mid, INFINITY), 0);
+        assert_int_equal(mvt_mask_fg_near(&g_mask, mid, -1.0f), 0);
+        assert_int_equal(mvt_mask_fg_near(&g_mask, nan_uv, 5.0f), 0);
+    }
+    const mvt_real mid[2] = {48.0f, 32.0f};
+    static mvt_mask_t empty;
+    memset(&empty, 0, sizeof(empty));
+    assert_int_equal(mvt_mask_fg_near(&empty, mid, 1e30f), 0);
+}
+
 static void test_mask_from_runs_hostile_rejected(void **state)
 {
     (void)state;
@@ -795,6 +848,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_mask_from_runs_valid_decodes),
         cmocka_unit_test(test_mask_from_runs_hostile_rejected),
+        cmocka_unit_test(test_mask_fg_near_matches_brute_force),
         cmocka_unit_test(test_image_build_matches_direct_convolution),
         cmocka_unit_test(test_normalise_matches_double_and_ess),
         cmocka_unit_test(test_resample_systematic_copies_floor_or_ceil),
