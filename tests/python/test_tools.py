@@ -272,7 +272,8 @@ def test_oracles_reach_the_bound_they_should():
     """motion --oracles: the EKF told the mixed scene's schedule sits on the schedule-conditioned
     PCRLB (it is the bound's own filter, run on noisy detections), the IMM of the generator's
     segment models that is not told the schedule is above it, and on Experiment 1's walk the EKF
-    of the walk's own model is at the bound."""
+    of the walk's own model is at the bound, the same walk without its pull to the room's centre
+    above it."""
     from mvtrack_tools import oracle
     from mvtrack_tools.motion_eval import draw
     from mvtrack_tools.scenes import head_detections
@@ -291,6 +292,7 @@ def test_oracles_reach_the_bound_they_should():
             ratios[name] = float(np.sqrt(e2[5:].mean() / bound[5:].mean()))
     assert 0.85 < ratios["kf-schedule"] < 1.1, ratios
     assert 0.85 < ratios["ekf-true"] < 1.1, ratios
+    assert ratios["ekf-true"] < ratios["ekf-no-centre"] < 1.2, ratios  # the centre is information
     assert ratios["imm-generator"] > ratios["kf-schedule"], ratios
     assert ratios["imm-generator"] < 1.5, ratios
 

@@ -18,7 +18,8 @@ stands still for 10 s (after 5 s to settle).
 
 --oracles adds reference filters on the Gaussian scenes (tools/mvtrack_tools/oracle.py, numpy,
 every detection used): what knowing the generator is worth. exp1: ekf-true (the walk's own model,
-its pull to the room's centre included) and ekf-cv-learnt; mixed: kf-schedule (told when the
+its pull to the room's centre included), ekf-no-centre (the same walk without that pull) and
+ekf-cv-learnt; mixed: kf-schedule (told when the
 person stops, turns or sits: it should sit on the bound) and imm-generator (an IMM of the
 generator's own segment models, not told the schedule).
 
@@ -200,7 +201,7 @@ def main(argv: list[str] | None = None) -> int:
         f"{k[0]}/{k[1]}": q.tolist() for k, q in learnt.items()}), indent=1))
 
     columns = list(a.variants) + ([] if not a.oracles else
-                                  [v for v in ("ekf-true", "ekf-cv-learnt", "kf-schedule", "imm-generator")
+                                  [v for v in ("ekf-true", "ekf-no-centre", "ekf-cv-learnt", "kf-schedule", "imm-generator")
                                    if any(r["variant"] == v for r in rows)])
     lines = []
     for occ in sorted({r["occlusion"] for r in rows}):

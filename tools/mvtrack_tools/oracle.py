@@ -9,6 +9,10 @@ camera linearised at the filter's own estimate:
 
 - `ekf-true`: exp1, the EKF of the generator's own model (the spring included);
 - `ekf-cv-learnt`: exp1, the constant-velocity EKF with q learnt from a training scene's truth;
+- `ekf-no-centre`: exp1, the generator's walk without its pull to the room's centre: each
+  horizontal velocity reverts to zero at the walk's own damping rate 2 zeta omega, driven by its
+  own q (an integrated Ornstein-Uhlenbeck velocity), the height as in `ekf-cv-learnt`. Everything
+  the generator knows but where the room's centre is;
 - `kf-schedule`: mixed, the EKF told the schedule (each frame's true F, b, Q): it should sit on
   the bound, and so checks the bound and the scenes;
 - `imm-generator`: mixed, an IMM of the generator's own seven segment models (stand, walk, turn,
@@ -20,6 +24,7 @@ numpy only; ~2 s per 60 s scene and filter.
 from __future__ import annotations
 
 import numpy as np
+from scipy.linalg import expm
 
 from . import motion
 from .rig import Rig
@@ -77,6 +82,26 @@ def cv_model(q: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarr
     return F, np.zeros(6), Q
 
 
+def no_centre_model(wm: WalkModel, q_height: float, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """F, b, Q of Experiment 1's walk without the pull to the room's centre (module docstring)."""
+    F = np.eye(6)
+    Q = np.zeros((6, 6))
+    for i in range(3):
+        damping, q = (2 * wm.axes[i].zeta * wm.axes[i].omega, wm.axes[i].q) if i < 2 else (0.0, q_height)
+        A = np.array([[0.0, 1.0], [0.0, -damping]])
+        M = np.zeros((4, 4))
+        M[:2, :2] = -A
+        M[1, 3] = q
+        M[2:, 2:] = A.T
+        E = expm(M * dt)
+        Fi = E[2:, 2:].T
+        Qi = Fi @ E[:2, 2:]
+        idx = [i, i + 3]
+        F[np.ix_(idx, idx)] = Fi
+        Q[np.ix_(idx, idx)] = 0.5 * (Qi + Qi.T)
+    return F, np.zeros(6), Q
+
+
 def exp1_references(rig: Rig, dets, var: float, states: np.ndarray, q_learnt: np.ndarray) -> dict[str, np.ndarray]:
     dt = 1.0 / rig.frame_rate
     wm = WalkModel.for_room(rig.volume_min, rig.volume_max)
@@ -85,9 +110,11 @@ def exp1_references(rig: Rig, dets, var: float, states: np.ndarray, q_learnt: np
     x0 = np.r_[[ax.centre for ax in wm.axes], 0.0, 0.0, 0.0]
     n = len(dets)
     Fc, bc, Qc = cv_model(q_learnt, dt)
+    Fo, bo, Qo = no_centre_model(wm, float(q_learnt[2]), dt)
     return {
         "ekf-true": ekf(rig, dets, var, [F] * n, [b] * n, [Q] * n, x0, P0),
         "ekf-cv-learnt": ekf(rig, dets, var, [Fc] * n, [bc] * n, [Qc] * n, x0, P0),
+        "ekf-no-centre": ekf(rig, dets, var, [Fo] * n, [bo] * n, [Qo] * n, x0, P0),
     }
 
 
