@@ -1093,6 +1093,39 @@ static void test_mvt_tracker_step_vanished_person_contradicted_deleted(void **st
     }
 }
 
+/* A ghost's blob in camera k: its top uv (G's projection) and a body's box under it. Returns the
+ * body's half width in pixels at G's depth. */
+static mvt_real ghost_box(int k, const mvt_real G[3], mvt_real uv[2], mvt_real box[4])
+{
+    mvt_real c[3];
+    assert_int_equal(mvt_cam_project(&g_cams[k], G, uv, NULL), MVT_OK);
+    mvt_cam_to_camera(&g_cams[k], G, c);
+    const mvt_real half = (mvt_real)0.22 * g_cams[k].fx / c[2];
+    box[0] = uv[0] - half;
+    box[1] = uv[1] - half;
+    box[2] = uv[0] + half;
+    box[3] = uv[1] + 8 * half;
+    return half;
+}
+
+/* Appends the ghost's blob to camera k's view: its top with 2 px of noise, its box if with_box. */
+static void add_ghost_blob(int k, const mvt_real G[3], test_rng_t *rng, int with_box)
+{
+    mvt_real uv[2], box[4];
+    (void)ghost_box(k, G, uv, box);
+    mvt_view_t *v = &g_frame.views[k];
+    mvt_detection_t *d = &v->det[v->num_detections++];
+    memset(d, 0, sizeof(*d));
+    d->u = uv[0] + (mvt_real)(2.0 * test_normal(rng));
+    d->v = uv[1] + (mvt_real)(2.0 * test_normal(rng));
+    d->sigma_px = 2;
+    d->score = 1;
+    d->hue = d->saturation = -1;
+    if (with_box) {
+        memcpy(d->box, box, sizeof(box));
+    }
+}
+
 /* A ghost: cameras 0 and 1 each report a blob whose rays meet at G (as two other people's blobs
  * may), while cameras 2-4, which send boxes and have G in their pictures, show nobody there. Two
  * real people are seen by all five. With boxes the ghost is never confirmed (births refuted, a
@@ -1110,24 +1143,7 @@ static void test_mvt_tracker_step_ghost_two_views_refuted_by_three(void **state)
         for (int f = 0; f < 75; f++) {
             frame_blobs(X, 2, 1000000 + f * 40000, &rng, 2.0, with_boxes);
             for (int k = 0; k < 2; k++) {
-                mvt_view_t *v = &g_frame.views[k];
-                mvt_real uv[2], c[3];
-                assert_int_equal(mvt_cam_project(&g_cams[k], G, uv, NULL), MVT_OK);
-                mvt_cam_to_camera(&g_cams[k], G, c);
-                const mvt_real half = (mvt_real)0.22 * g_cams[k].fx / c[2];
-                mvt_detection_t *d = &v->det[v->num_detections++];
-                memset(d, 0, sizeof(*d));
-                d->u = uv[0] + (mvt_real)(2.0 * test_normal(&rng));
-                d->v = uv[1] + (mvt_real)(2.0 * test_normal(&rng));
-                d->sigma_px = 2;
-                d->score = 1;
-                d->hue = d->saturation = -1;
-                if (with_boxes) {
-                    d->box[0] = uv[0] - half;
-                    d->box[1] = uv[1] - half;
-                    d->box[2] = uv[0] + half;
-                    d->box[3] = uv[1] + 8 * half;
-                }
+                add_ghost_blob(k, G, &rng, with_boxes);
             }
             mvt_tracker_step(&g_tracker, &g_frame, &g_out);
             ghost_confirmed += id_near(G) > 0;
@@ -1183,24 +1199,14 @@ static void test_mvt_tracker_step_ghost_in_boxes_refuted_by_masks(void **state)
             frame_blobs(X, 2, 1000000 + f * 40000, &rng, 2.0, 1);
             for (int k = 0; k < 5; k++) {
                 mvt_view_t *v = &g_frame.views[k];
-                mvt_real uv[2], c[3], boxes[MVT_MAX_DETECTIONS + 1][4];
-                assert_int_equal(mvt_cam_project(&g_cams[k], G, uv, NULL), MVT_OK);
-                mvt_cam_to_camera(&g_cams[k], G, c);
-                const mvt_real half = (mvt_real)0.22 * g_cams[k].fx / c[2];
-                const mvt_real gbox[4] = {uv[0] - half, uv[1] - half, uv[0] + half, uv[1] + 8 * half};
+                mvt_real uv[2], gbox[4], boxes[MVT_MAX_DETECTIONS + 1][4];
+                const mvt_real half = ghost_box(k, G, uv, gbox);
                 int nb = 0;
                 for (int d = 0; d < v->num_detections; d++, nb++) {
                     memcpy(boxes[nb], v->det[d].box, sizeof(boxes[nb]));
                 }
                 if (k < 2) { /* the two views whose fragments meet at G */
-                    mvt_detection_t *d = &v->det[v->num_detections++];
-                    memset(d, 0, sizeof(*d));
-                    d->u = uv[0] + (mvt_real)(2.0 * test_normal(&rng));
-                    d->v = uv[1] + (mvt_real)(2.0 * test_normal(&rng));
-                    d->sigma_px = 2;
-                    d->score = 1;
-                    d->hue = d->saturation = -1;
-                    memcpy(d->box, gbox, sizeof(gbox));
+                    add_ghost_blob(k, G, &rng, 1);
                     memcpy(boxes[nb++], gbox, sizeof(gbox));
                 } else { /* every box of the view widened over G's place: background in the mask */
                     for (int d = 0; d < v->num_detections; d++) {
