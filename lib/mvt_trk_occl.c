@@ -9,7 +9,10 @@
  *
  * For each confirmed track that camera k did not update, every blob of camera k that another
  * track took (or that was withheld as a merged pair's) and whose box holds the track's predicted
- * head is a hypothesis "hidden in this blob". The head then lies in the box's column band, at
+ * head is a hypothesis "hidden in this blob". Where camera k sent its foreground mask, the
+ * mask must also hold something near the predicted head: a hidden head is foreground (merged into
+ * another's silhouette, or behind a body), and the background a box spans beside and between its
+ * people hides nobody (docs/tracking.md, "Hidden only in foreground"). The head then lies in the box's column band, at
  * least body_halfwidth_m (seen at the track's depth) inside the side edges, widened by the
  * detection's pixel sigma. The likeliest blob under a uniform position in the band (the prior
  * mass of the band over its width) constrains the track: its predicted column is truncated to
@@ -87,10 +90,15 @@ int mvt_trk_seen_heads(const mvt_tracker_t *self, int k, mvt_real heads[][4], in
  * blob's box holds much background beside and between the people in it, where a ghost (two views'
  * fragments meeting) or a track drifted off its person would find cover. Without a mask, any
  * blob's box. */
+static int has_mask(const mvt_view_t *view)
+{
+    return view->mask != NULL && view->mask->width > 0;
+}
+
 static int place_covered(const mvt_tracker_t *self, const mvt_view_t *view, int k, const mvt_real uv[2],
                          mvt_real slack_px)
 {
-    if (view->mask != NULL && view->mask->width > 0) {
+    if (has_mask(view)) {
         return mvt_mask_fg_near(view->mask, uv, slack_px);
     }
     for (int d = 0; d < self->num_meas[k]; d++) {
@@ -363,9 +371,13 @@ void mvt_trk_occlusion(mvt_tracker_t *self, const mvt_view_t *view, int k, const
         }
         const mvt_real su = MVT_SQRT(p->hph[0]), sv = MVT_SQRT(p->hph[2]);
         const mvt_real half_px = cam->fx * c->body_halfwidth_m / p->depth_m;
+        /* a person hidden in a blob has foreground at their head's place (their own head, merged
+         * into another's silhouette, or the body in front of it): where the view sent its mask, a
+         * box's background is no hiding place */
+        const int hideable = !has_mask(view) || mvt_mask_fg_near(view->mask, p->h, empty_slack(cam, p));
         int best = -1;
         mvt_real best_lik = MVT_R(0.0), best_lo = MVT_R(0.0), best_hi = MVT_R(0.0);
-        for (int d = 0; d < nd; d++) {
+        for (int d = 0; d < nd && hideable; d++) {
             const mvt_real *b = view->det[d].box;
             if (!self->used[k][d] || !mvt_trk_box_ok(b)) {
                 continue;

@@ -1182,6 +1182,19 @@ static void mask_of_boxes(int k, const mvt_real (*box)[4], int n)
     g_frame.views[k].mask = m;
 }
 
+/* Every box of camera k's view widened to hold gbox and half its width more on each side (a
+ * shadow, or people's merged blob spanning that place, as a box does). */
+static void widen_boxes_over(int k, const mvt_real gbox[4], mvt_real half)
+{
+    mvt_view_t *v = &g_frame.views[k];
+    for (int d = 0; d < v->num_detections; d++) {
+        for (int j = 0; j < 2; j++) {
+            v->det[d].box[j] = v->det[d].box[j] < gbox[j] - half ? v->det[d].box[j] : gbox[j] - half;
+            v->det[d].box[j + 2] = v->det[d].box[j + 2] > gbox[j + 2] + half ? v->det[d].box[j + 2] : gbox[j + 2] + half;
+        }
+    }
+}
+
 /* The ghost of the test above, where cameras 2-4's blobs' boxes also hold its place (a shadow, or
  * people's merged blob spanning it, as a box does): the boxes no longer refute it, and it is
  * confirmed. Where those cameras also send their foreground masks, which hold the two people's
@@ -1209,13 +1222,7 @@ static void test_mvt_tracker_step_ghost_in_boxes_refuted_by_masks(void **state)
                     add_ghost_blob(k, G, &rng, 1);
                     memcpy(boxes[nb++], gbox, sizeof(gbox));
                 } else { /* every box of the view widened over G's place: background in the mask */
-                    for (int d = 0; d < v->num_detections; d++) {
-                        for (int j = 0; j < 2; j++) {
-                            v->det[d].box[j] = v->det[d].box[j] < gbox[j] - half ? v->det[d].box[j] : gbox[j] - half;
-                            v->det[d].box[j + 2] = v->det[d].box[j + 2] > gbox[j + 2] + half ? v->det[d].box[j + 2]
-                                                                                             : gbox[j + 2] + half;
-                        }
-                    }
+                    widen_boxes_over(k, gbox, half);
                 }
                 if (with_masks) {
                     mask_of_boxes(k, (const mvt_real(*)[4])boxes, nb);
@@ -1230,6 +1237,56 @@ static void test_mvt_tracker_step_ghost_in_boxes_refuted_by_masks(void **state)
         } else {
             assert_true(ghost_confirmed > 50);
         }
+    }
+}
+
+/* A person vanishes in the middle of the room, and from then on every camera's boxes (the two
+ * remaining people's) are widened over the place where they stood: the track is hidden in those
+ * boxes, and the boxes' extent even needs it, so it lives on. Where the cameras send their masks,
+ * which hold the two people's silhouettes only, the place is background in every view: the track
+ * is hidden nowhere, contradicted and deleted (contra_max_s, 0.5 s). */
+static void test_mvt_tracker_step_vanished_in_widened_boxes_deleted_by_masks(void **state)
+{
+    (void)state;
+    const mvt_real X[3][3] = {{3.0f, 2.5f, 1.7f}, {1.0f, 1.0f, 1.8f}, {5.0f, 4.0f, 1.75f}};
+    for (int with_masks = 1; with_masks >= 0; with_masks--) {
+        init();
+        test_rng_t rng = {17};
+        int f = 0;
+        for (; f < 30; f++) {
+            frame_blobs(X, 3, 1000000 + f * 40000, &rng, 2.0, 1);
+            mvt_tracker_step(&g_tracker, &g_frame, &g_out);
+        }
+        const int32_t id = id_near(X[0]);
+        assert_true(id > 0);
+        int gone_after = -1;
+        for (int g = 0; g < 100; g++, f++) {
+            frame_blobs(&X[1], 2, 1000000 + f * 40000, &rng, 2.0, 1);
+            for (int k = 0; k < 5; k++) {
+                mvt_view_t *v = &g_frame.views[k];
+                mvt_real uv[2], gbox[4], boxes[MVT_MAX_DETECTIONS][4];
+                const mvt_real half = ghost_box(k, X[0], uv, gbox);
+                for (int d = 0; d < v->num_detections; d++) {
+                    memcpy(boxes[d], v->det[d].box, sizeof(boxes[d]));
+                }
+                if (with_masks) {
+                    mask_of_boxes(k, (const mvt_real(*)[4])boxes, v->num_detections);
+                }
+                widen_boxes_over(k, gbox, half);
+            }
+            mvt_tracker_step(&g_tracker, &g_frame, &g_out);
+            if (gone_after < 0 && find_id(id) == NULL) {
+                gone_after = g;
+            }
+        }
+        print_message("vanished in widened boxes, masks %d: gone after %d frames\n", with_masks, gone_after);
+        if (with_masks) {
+            assert_true(gone_after > 0 && gone_after <= 15);
+            assert_int_equal(g_tracker.counters.deleted_contradicted, 1);
+        } else {
+            assert_true(gone_after < 0 || gone_after > 45);
+        }
+        assert_true(id_near(X[1]) > 0 && id_near(X[2]) > 0);
     }
 }
 
@@ -1421,6 +1478,7 @@ int main(void)
         cmocka_unit_test(test_mvt_tracker_step_vanished_person_contradicted_deleted),
         cmocka_unit_test(test_mvt_tracker_step_ghost_two_views_refuted_by_three),
         cmocka_unit_test(test_mvt_tracker_step_ghost_in_boxes_refuted_by_masks),
+        cmocka_unit_test(test_mvt_tracker_step_vanished_in_widened_boxes_deleted_by_masks),
         cmocka_unit_test(test_mvt_tracker_step_camera_that_cannot_see_does_not_update),
         cmocka_unit_test(test_mvt_tracker_step_person_where_one_camera_reaches_kept),
     };
