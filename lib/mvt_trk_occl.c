@@ -12,15 +12,15 @@
  * head is a hypothesis "hidden in this blob". Where camera k sent its foreground mask, the
  * mask must also hold something near the predicted head: a hidden head is foreground (merged into
  * another's silhouette, or behind a body), and the background a box spans beside and between its
- * people hides nobody (docs/tracking.md, "Hidden only in foreground"). The head then lies in the box's column band, at
- * least body_halfwidth_m (seen at the track's depth) inside the side edges, widened by the
- * detection's pixel sigma. The likeliest blob under a uniform position in the band (the prior
- * mass of the band over its width) constrains the track: its predicted column is truncated to
- * the band (mvt_cv_truncate, on the ground position: see below). A truncation moves a prior that sits inside a wide band only a
- * little, and a hidden person's prior usually does: the update does not drag the track onto the
- * blob's centre (which a Gaussian pseudo-measurement at the centre would do, merging the hidden
- * person into the visible one), it only keeps the track from drifting out of the band, which
- * bounds its covariance while it is hidden.
+ * people hides nobody (docs/tracking.md, "Hidden only in foreground"). The head then lies in the
+ * box's column band, at least body_halfwidth_m (seen at the track's depth) inside the side edges,
+ * widened by the detection's pixel sigma. The likeliest blob under a uniform position in the band
+ * (the prior mass of the band over its width) constrains the track: its predicted column is
+ * truncated to the band (mvt_cv_truncate, on the ground position: see below). A truncation moves
+ * a prior that sits inside a wide band only a little, and a hidden person's prior usually does:
+ * the update does not drag the track onto the blob's centre (which a Gaussian pseudo-measurement
+ * at the centre would do, merging the hidden person into the visible one), it only keeps the
+ * track from drifting out of the band, which bounds its covariance while it is hidden.
  *
  * The view then counts toward keeping the track alive (mvt_trk_delete: seen views plus occluded
  * views >= seen_min_views). It never counts as a hit toward confirmation, and a blob without a box
@@ -85,16 +85,17 @@ int mvt_trk_seen_heads(const mvt_tracker_t *self, int k, mvt_real heads[][4], in
     return n;
 }
 
-/* Does anything in view k hold the image point uv (slack_px either way)? Where the camera sent its
- * foreground mask, the mask's pixels answer: a blob's box is a rectangle, and a merged or shadowed
- * blob's box holds much background beside and between the people in it, where a ghost (two views'
- * fragments meeting) or a track drifted off its person would find cover. Without a mask, any
- * blob's box. */
+/* Did view k send its foreground mask? */
 static int has_mask(const mvt_view_t *view)
 {
     return view->mask != NULL && view->mask->width > 0;
 }
 
+/* Does anything in view k hold the image point uv (slack_px either way)? Where the camera sent its
+ * foreground mask, the mask's pixels answer: a blob's box is a rectangle, and a merged or shadowed
+ * blob's box holds much background beside and between the people in it, where a ghost (two views'
+ * fragments meeting) or a track drifted off its person would find cover. Without a mask, any
+ * blob's box. */
 static int place_covered(const mvt_tracker_t *self, const mvt_view_t *view, int k, const mvt_real uv[2],
                          mvt_real slack_px)
 {
