@@ -374,8 +374,12 @@ void mvt_trk_occlusion(mvt_tracker_t *self, const mvt_view_t *view, int k, const
         const mvt_real half_px = cam->fx * c->body_halfwidth_m / p->depth_m;
         /* a person hidden in a blob has foreground at their head's place (their own head, merged
          * into another's silhouette, or the body in front of it): where the view sent its mask, a
-         * box's background is no hiding place */
-        const int hideable = !has_mask(view) || mvt_mask_fg_near(view->mask, p->h, empty_slack(cam, p));
+         * box's background is no hiding place. The same answer says below whether the place is
+         * covered at all. */
+        const mvt_real slack = empty_slack(cam, p);
+        const int masked = has_mask(view);
+        const int fg_near = masked && mvt_mask_fg_near(view->mask, p->h, slack);
+        const int hideable = !masked || fg_near;
         int best = -1;
         mvt_real best_lik = MVT_R(0.0), best_lo = MVT_R(0.0), best_hi = MVT_R(0.0);
         for (int d = 0; d < nd && hideable; d++) {
@@ -412,9 +416,8 @@ void mvt_trk_occlusion(mvt_tracker_t *self, const mvt_view_t *view, int k, const
             }
         }
         if (best < 0) {
-            /* not seen, not hidden: is any blob at all near the head? */
-            const mvt_real slack = empty_slack(cam, p);
-            const int covered = place_covered(self, view, k, p->h, slack);
+            /* not seen, not hidden: is anything at all near the head? */
+            const int covered = masked ? fg_near : place_covered(self, view, k, p->h, slack);
             /* existence (mvt_trk_existence): with none, the person was missed, if in the picture */
             if (!covered && su > MVT_R(0.0) && sv > MVT_R(0.0)) {
                 self->ev_llr[t] += MVT_LOG(MVT_R(1.0) - c->p_detect * in_picture(cam, p->h, su, sv));

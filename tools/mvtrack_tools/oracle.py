@@ -19,12 +19,11 @@ camera linearised at the filter's own estimate:
   stop, sit down, seated, get up) with switching rates from the segments' mean durations: the
   schedule is not told. It is what a model bank that knew the simulator could reach.
 
-numpy only; ~2 s per 60 s scene and filter.
+numpy (scipy's matrix exponential through `motion.discretise`); ~2 s per 60 s scene and filter.
 """
 from __future__ import annotations
 
 import numpy as np
-from scipy.linalg import expm
 
 from . import motion
 from .rig import Rig
@@ -88,17 +87,10 @@ def no_centre_model(wm: WalkModel, q_height: float, dt: float) -> tuple[np.ndarr
     Q = np.zeros((6, 6))
     for i in range(3):
         damping, q = (2 * wm.axes[i].zeta * wm.axes[i].omega, wm.axes[i].q) if i < 2 else (0.0, q_height)
-        A = np.array([[0.0, 1.0], [0.0, -damping]])
-        M = np.zeros((4, 4))
-        M[:2, :2] = -A
-        M[1, 3] = q
-        M[2:, 2:] = A.T
-        E = expm(M * dt)
-        Fi = E[2:, 2:].T
-        Qi = Fi @ E[:2, 2:]
+        Fi, _, Qi = motion.discretise(np.array([[0.0, 1.0], [0.0, -damping]]), np.zeros(2), q, dt)
         idx = [i, i + 3]
         F[np.ix_(idx, idx)] = Fi
-        Q[np.ix_(idx, idx)] = 0.5 * (Qi + Qi.T)
+        Q[np.ix_(idx, idx)] = Qi
     return F, np.zeros(6), Q
 
 
