@@ -178,7 +178,8 @@ static int tracker_state_ok(const mvt_tracker_config_t *c, const mvt_tracker_per
         const int64_t now = p->last_utime_us;
         if (tr->id < 0 || !p->have_time || !status_ok(tr->status) || !estimate_ok(c, &tr->s, now) ||
             !time_ok(tr->last_update_us, now) || !time_ok(tr->last_explained_us, now) ||
-            !time_ok(tr->last_consistent_us, now) || !time_ok(tr->last_needed_us, now) || tr->misses < 0 ||
+            !time_ok(tr->last_consistent_us, now) || !time_ok(tr->last_unrefuted_us, now) ||
+            !time_ok(tr->last_needed_us, now) || tr->misses < 0 ||
             !bank_ok(c, tr) || !lost_ok(c, &tr->held, now) || !isfinite(tr->exist_llr) ||
             !isfinite(tr->need_llr) || !seen_height_ok(c, tr) || !mvt_trk_app_ok(&tr->app) || !views_ok(tr, now) ||
             (tr->held.id != 0 && (tr->held.id != tr->id || tr->status != MVT_TRACK_TENTATIVE))) {
@@ -213,6 +214,7 @@ static void shift_track_clocks(mvt_track_t *tracks, mvt_lost_t *lost, int64_t by
             tracks[t].last_update_us += by_us;
             tracks[t].last_explained_us += by_us;
             tracks[t].last_consistent_us += by_us;
+            tracks[t].last_unrefuted_us += by_us;
             tracks[t].last_needed_us += by_us;
             shift_lost_clocks(&tracks[t].held, by_us);
         }

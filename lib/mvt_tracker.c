@@ -335,6 +335,7 @@ mvt_err_t mvt_tracker_step(mvt_tracker_t *self, const mvt_frame_t *frame, mvt_ou
         self->tracks[t].need_llr *= forget;
         self->tracks[t].cameras_uncovered = 0u;
         self->tracks[t].cameras_empty = 0u;
+        self->tracks[t].cameras_fg = 0u;
         self->visible[t] = 0u;
         self->ev_llr[t] = MVT_R(0.0);
     }

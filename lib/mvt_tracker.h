@@ -126,7 +126,8 @@ typedef struct mvt_tracker_config {
     int contra_views;           /* a track not seen this frame whose place is in no blob in at least
                                    this many views (with boxes) is contradicted: it is not hidden
                                    and it is not there; >= 1, default 2 */
-    mvt_real contra_max_s;      /* a track contradicted this long is deleted; > 0, default 0.5 */
+    mvt_real contra_max_s;      /* a track contradicted this long is deleted (twice this long where
+                                   the views' masks show foreground at its place); > 0, default 0.5 */
     mvt_real exclusion_m;       /* two people's heads are at least this far apart horizontally: a
                                    track seen in fewer than seen_min_views cameras this frame is kept
                                    this far from every track seen in more (mvt_cv_truncate along
@@ -286,11 +287,14 @@ typedef struct mvt_track {
     uint32_t cameras_uncovered; /* this frame: cameras in whose picture the track's place is in no
                                    blob another track took (occlusion on, views with boxes only) */
     uint32_t cameras_empty;     /* this frame: ... in no blob at all (evidence against the track) */
+    uint32_t cameras_fg;        /* this frame: cameras_uncovered whose foreground mask holds
+                                   something near the place */
     uint32_t hit_history;       /* bit 0: this frame had an update, bit 1: previous, ... */
     int32_t misses;             /* consecutive frames not seen (seen_min_views) */
     int64_t last_update_us;     /* last frame seen */
     int64_t last_explained_us;  /* last frame seen, or seen and hidden in enough views */
     int64_t last_consistent_us; /* last frame seen, or contradicted by fewer than contra_views */
+    int64_t last_unrefuted_us;  /* ... not counting views whose mask shows foreground at the place */
     int64_t last_needed_us;     /* last frame seen, or hidden where the blobs' boxes need the person */
     mvt_real need_llr;          /* the boxes' evidence for a hidden track's person: log-likelihood
                                    ratio of the hiding blobs' edges, with against without them,

@@ -35,6 +35,13 @@ static inline int mvt_trk_popcount(uint32_t x)
 /* How long the boxes' evidence for a hidden person is remembered (need_llr), s: a second of frames
  * outweighs one noisy box edge, and a person who left stops being needed within a few seconds. */
 #define MVT_TRK_NEED_MEMORY_S MVT_R(1.0)
+/* A track contradicted only by views whose foreground mask holds something at its place (its head
+ * in foreground, in no blob another track took) is deleted after this many times contra_max_s; one
+ * that views show on background, after contra_max_s. Foreground there is what a person merged into
+ * a blob looks like when the track's prediction has left the blob's band, and it lasts as long as
+ * the people stay merged; background is what an absent person looks like (docs/tracking.md,
+ * "Contradicted on foreground"). */
+#define MVT_TRK_FG_CONTRA MVT_R(2.0)
 /* chi-square, 3 degrees of freedom, 99.9 %: the gate of both */
 #define MVT_TRK_GATE3 MVT_R(16.27)
 

@@ -7,7 +7,9 @@
  * confirmed after confirm_hits seen frames among the last confirm_window
  * and deleted after tentative_max_misses consecutive misses. A confirmed track that no camera
  * updated this frame is COASTING; it is deleted once unseen for coast_max_s (or, hidden in other
- * tracks' blobs, once neither seen nor needed by their boxes for occluded_max_s), when its position
+ * tracks' blobs, once neither seen nor needed by their boxes for occluded_max_s), once contradicted
+ * (its place in no blob another track took, in contra_views views) for contra_max_s, or for
+ * MVT_TRK_FG_CONTRA times that where those views' masks show foreground at the place, when its position
  * standard deviation exceeds max_pos_std_m on any axis, when it leaves the volume (plus margin),
  * or when its covariance cannot be repaired. A track unseen for exit_coast_s near the volume's
  * side walls is deleted sooner (people leave through the sides; its identity is kept for recovery
@@ -116,6 +118,10 @@ void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us)
         if (!contradicted) {
             tr->last_consistent_us = now_us;
         }
+        /* ... by views that show the place on background (or have no mask to tell) */
+        if (!refuted && (hit || mvt_trk_popcount(tr->cameras_uncovered & ~tr->cameras_fg) < c->contra_views)) {
+            tr->last_unrefuted_us = now_us;
+        }
         if (placed) {
             tr->seen_z = tr->s.x[2];
             tr->seen_zz = tr->s.P[14];
@@ -163,7 +169,8 @@ void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us)
                 reason = &self->counters.deleted_unseen;
             } else if (unneeded_s > c->occluded_max_s) {
                 reason = &self->counters.deleted_occluded;
-            } else if (mvt_us_to_s(now_us - tr->last_consistent_us) > c->contra_max_s) {
+            } else if (mvt_us_to_s(now_us - tr->last_unrefuted_us) > c->contra_max_s ||
+                       mvt_us_to_s(now_us - tr->last_consistent_us) > MVT_TRK_FG_CONTRA * c->contra_max_s) {
                 reason = &self->counters.deleted_contradicted;
             } else if (lost_s > c->exit_coast_s && near_side_wall(c, tr->s.x)) {
                 reason = &self->counters.deleted_exit;

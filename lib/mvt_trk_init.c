@@ -289,6 +289,7 @@ static int birth(mvt_tracker_t *self, const mvt_frame_t *frame, const mvt_birth_
     tr->last_update_us = frame->utime_us;
     tr->last_explained_us = frame->utime_us;
     tr->last_consistent_us = frame->utime_us;
+    tr->last_unrefuted_us = frame->utime_us;
     tr->last_needed_us = frame->utime_us;
     self->counters.births++;
     return slot;

@@ -1290,6 +1290,58 @@ static void test_mvt_tracker_step_vanished_in_widened_boxes_deleted_by_masks(voi
     }
 }
 
+/* A person stays where they stood, and from frame 30 on only camera 0 reports their blob; cameras
+ * 1-4 report the two others' only (their detector dropped or mis-cut the blob). The track is then
+ * unseen and in no blob another track took in four views: contradicted. Where those views' masks
+ * still hold the person's silhouette, the foreground at the place is what a person merged into a
+ * blob whose band the prediction has left looks like, and the track is deleted after
+ * MVT_TRK_FG_CONTRA x contra_max_s (1 s); where the masks show the place on background, after
+ * contra_max_s (0.5 s) as before. */
+static void test_mvt_tracker_step_contradicted_on_foreground_lasts_longer(void **state)
+{
+    (void)state;
+    const mvt_real X[3][3] = {{3.0f, 2.5f, 1.7f}, {1.0f, 1.0f, 1.8f}, {5.0f, 4.0f, 1.75f}};
+    int gone[2] = {-1, -1};
+    for (int fg = 1; fg >= 0; fg--) {
+        init();
+        test_rng_t rng = {29};
+        int f = 0;
+        for (; f < 30; f++) {
+            frame_blobs(X, 3, 1000000 + f * 40000, &rng, 2.0, 1);
+            mvt_tracker_step(&g_tracker, &g_frame, &g_out);
+        }
+        const int32_t id = id_near(X[0]);
+        assert_true(id > 0);
+        for (int g = 0; g < 60 && gone[fg] < 0; g++, f++) {
+            frame_blobs(X, 3, 1000000 + f * 40000, &rng, 2.0, 1);
+            const mvt_view_t seen_by_0 = g_frame.views[0];
+            frame_blobs(&X[1], 2, 1000000 + f * 40000, &rng, 2.0, 1);
+            g_frame.views[0] = seen_by_0;
+            for (int k = 1; k < 5; k++) {
+                mvt_view_t *v = &g_frame.views[k];
+                mvt_real uv[2], boxes[MVT_MAX_DETECTIONS + 1][4];
+                int nb = 0;
+                for (int d = 0; d < v->num_detections; d++, nb++) {
+                    memcpy(boxes[nb], v->det[d].box, sizeof(boxes[nb]));
+                }
+                if (fg) {
+                    (void)ghost_box(k, X[0], uv, boxes[nb++]);
+                }
+                mask_of_boxes(k, (const mvt_real(*)[4])boxes, nb);
+            }
+            mvt_tracker_step(&g_tracker, &g_frame, &g_out);
+            if (find_id(id) == NULL) {
+                gone[fg] = g;
+            }
+        }
+        print_message("contradicted on %s: gone after %d frames\n", fg ? "foreground" : "background", gone[fg]);
+        assert_int_equal(g_tracker.counters.deleted_contradicted, 1);
+        assert_true(id_near(X[1]) > 0 && id_near(X[2]) > 0);
+    }
+    assert_true(gone[0] > 0 && gone[0] <= 14);  /* 0.5 s */
+    assert_true(gone[1] >= 24 && gone[1] <= 27); /* 1 s */
+}
+
 /* A person stands right under camera 0 (outside its picture, next to its focal plane), seen by the
  * other four; camera 0 sends a blob of someone else each frame. The prediction in camera 0 lies far
  * outside its picture with an image spread wider than the picture: camera 0 must not update the
@@ -1479,6 +1531,7 @@ int main(void)
         cmocka_unit_test(test_mvt_tracker_step_ghost_two_views_refuted_by_three),
         cmocka_unit_test(test_mvt_tracker_step_ghost_in_boxes_refuted_by_masks),
         cmocka_unit_test(test_mvt_tracker_step_vanished_in_widened_boxes_deleted_by_masks),
+        cmocka_unit_test(test_mvt_tracker_step_contradicted_on_foreground_lasts_longer),
         cmocka_unit_test(test_mvt_tracker_step_camera_that_cannot_see_does_not_update),
         cmocka_unit_test(test_mvt_tracker_step_person_where_one_camera_reaches_kept),
     };
