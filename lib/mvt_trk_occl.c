@@ -428,7 +428,7 @@ void mvt_trk_occlusion(mvt_tracker_t *self, const mvt_view_t *view, int k, const
             if (p->h[0] >= m && p->h[0] <= (mvt_real)cam->width - m && p->h[1] >= m &&
                 p->h[1] <= (mvt_real)cam->height - m) {
                 tr->cameras_uncovered |= 1u << k;
-                if (masked && covered) {
+                if (fg_near) {
                     tr->cameras_fg |= 1u << k; /* foreground there: weaker than background */
                 }
                 /* ... and if no blob at all holds the place (not too near the border to say, as

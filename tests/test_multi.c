@@ -1093,6 +1093,10 @@ static void test_mvt_tracker_step_vanished_person_contradicted_deleted(void **st
     }
 }
 
+/* The ghost tests' scene: two real people, and the place G where two views' blobs meet. */
+static const mvt_real GHOST_PEOPLE[2][3] = {{1.2f, 1.0f, 1.75f}, {4.8f, 3.9f, 1.7f}};
+static const mvt_real GHOST_AT[3] = {3.0f, 2.6f, 1.7f};
+
 /* A ghost's blob in camera k: its top uv (G's projection) and a body's box under it. Returns the
  * body's half width in pixels at G's depth. */
 static mvt_real ghost_box(int k, const mvt_real G[3], mvt_real uv[2], mvt_real box[4])
@@ -1134,8 +1138,8 @@ static void add_ghost_blob(int k, const mvt_real G[3], test_rng_t *rng, int with
 static void test_mvt_tracker_step_ghost_two_views_refuted_by_three(void **state)
 {
     (void)state;
-    const mvt_real X[2][3] = {{1.2f, 1.0f, 1.75f}, {4.8f, 3.9f, 1.7f}};
-    const mvt_real G[3] = {3.0f, 2.6f, 1.7f};
+    const mvt_real(*X)[3] = GHOST_PEOPLE;
+    const mvt_real *G = GHOST_AT;
     for (int with_boxes = 1; with_boxes >= 0; with_boxes--) {
         init();
         test_rng_t rng = {23};
@@ -1202,8 +1206,8 @@ static void widen_boxes_over(int k, const mvt_real gbox[4], mvt_real half)
 static void test_mvt_tracker_step_ghost_in_boxes_refuted_by_masks(void **state)
 {
     (void)state;
-    const mvt_real X[2][3] = {{1.2f, 1.0f, 1.75f}, {4.8f, 3.9f, 1.7f}};
-    const mvt_real G[3] = {3.0f, 2.6f, 1.7f};
+    const mvt_real(*X)[3] = GHOST_PEOPLE;
+    const mvt_real *G = GHOST_AT;
     for (int with_masks = 1; with_masks >= 0; with_masks--) {
         init();
         test_rng_t rng = {23};
