@@ -42,6 +42,23 @@ mvt_err_t mvt_mask_from_runs(mvt_mask_t *mask, int image_width, int image_height
  * O(r^2 / scale^2), stopping at the first foreground pixel. */
 int mvt_mask_fg_near(const mvt_mask_t *mask, const mvt_real uv[2], mvt_real r);
 
+/* The top of a head in the column band [u - half_w, u + half_w] (raw image pixels) between the
+ * image rows v_lo <= v_hi: the first mask row of that range with a foreground pixel in the band,
+ * provided the mask is background above it for clear_px raw pixels (or up to the picture's top),
+ * across the band and one pixel beyond each end of the run of foreground through that pixel. So
+ * not a slope rising out of the band (whose first row in the band would follow the band wherever
+ * it is put), not a fragment under a head (a torso below a hole), not the inside of a silhouette
+ * that goes on above the range. Its point, in the convention of a connected component's top
+ * (tools/mvtrack_tools/render.py): top_uv[0] the mean image column of the foreground in that row
+ * and the next, over the run and one pixel beyond each end; top_uv[1] the row's upper quarter.
+ * A run wider than max_width_px raw pixels (a shoulder line, two heads side by side) says
+ * nothing of one head's column: 0. Returns 1 with top_uv set, 0 when there is no such top, when it
+ * is on the mask's first row, when the mask is empty or an argument is not finite or negative. The
+ * PKF's measurement of a head that a merged blob's reported top does not show (mvt_trk_occl.c).
+ * O((half_w / scale + 1) * (v_hi - v_lo + clear_px) / scale + max_width_px / scale), no memory. */
+int mvt_mask_top_in_band(const mvt_mask_t *mask, mvt_real u, mvt_real half_w, mvt_real v_lo, mvt_real v_hi,
+                         mvt_real max_width_px, mvt_real clear_px, mvt_real top_uv[2]);
+
 #ifdef __cplusplus
 }
 #endif

@@ -142,6 +142,37 @@ static void prepare_measurements(mvt_tracker_t *self, const mvt_frame_t *frame)
     }
 }
 
+/* Updates track t with measurement m of camera k (detection d of the view, or -1: the head read
+ * from the view's mask) and keeps the frame's books. Returns 1 when the update was made. */
+static int apply_measurement(mvt_tracker_t *self, int t, int k, const mvt_pkf_meas_t *m, int d, int merged)
+{
+    mvt_track_t *tr = &self->tracks[t];
+    mvt_pkf_innov_t in;
+    const mvt_real *extra = d >= 0 && self->merge_wide[t] ? self->merge_cov[t] : NULL;
+    mvt_err_t err = mvt_pkf_innovation_from(&self->pred[t], m, extra, &in);
+    if (err == MVT_OK) {
+        err = mvt_trk_update_pkf(self, tr, k, &in, extra);
+    }
+    if (err != MVT_OK) {
+        self->counters.numeric_faults++;
+        return 0;
+    }
+    if (tr->status != MVT_TRACK_TENTATIVE) {
+        self->ev_llr[t] += mvt_trk_detected_llr(self, k, &in);
+    }
+    tr->cameras_used |= 1u << k;
+    if (tr->view[k].p < MVT_R(0.5)) {
+        tr->cameras_placed |= 1u << k;
+    }
+    self->counters.updates++;
+    self->counters.merged_updates += (uint64_t)merged;
+    if (d >= 0 && self->chroma_ok[k][d] && self->merge_nb[t] < 0 && !merged) {
+        /* a blob that may hold an unresolved neighbour mixes two people's colour */
+        mvt_trk_app_update(&tr->app, self->chroma[k][d]);
+    }
+    return 1;
+}
+
 static void step_projective(mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order)
 {
     const mvt_tracker_config_t *c = &self->cfg;
@@ -156,36 +187,18 @@ static void step_projective(mvt_tracker_t *self, const mvt_frame_t *frame, const
         int assign[MVT_MAX_TARGETS];
         uint8_t merged[MVT_MAX_TARGETS];
         mvt_trk_associate(self, &frame->views[k], k, assign, merged);
+        memset(self->top_ok, 0, sizeof(self->top_ok));
         if (c->occlusion) {
             mvt_trk_occlusion(self, &frame->views[k], k, assign);
         }
         for (int t = 0; t < MVT_MAX_TARGETS; t++) {
-            mvt_track_t *tr = &self->tracks[t];
-            if (tr->id == 0 || assign[t] < 0) {
+            if (self->tracks[t].id == 0) {
                 continue;
             }
-            mvt_pkf_innov_t in;
-            const mvt_real *extra = self->merge_wide[t] ? self->merge_cov[t] : NULL;
-            mvt_err_t err = mvt_pkf_innovation_from(&self->pred[t], &self->meas[k][assign[t]], extra, &in);
-            if (err == MVT_OK) {
-                err = mvt_trk_update_pkf(self, tr, k, &in, extra);
-            }
-            if (err == MVT_OK) {
-                if (tr->status != MVT_TRACK_TENTATIVE) {
-                    self->ev_llr[t] += mvt_trk_detected_llr(self, k, &in);
-                }
-                tr->cameras_used |= 1u << k;
-                if (tr->view[k].p < MVT_R(0.5)) {
-                    tr->cameras_placed |= 1u << k;
-                }
-                self->counters.updates++;
-                self->counters.merged_updates += merged[t];
-                if (self->chroma_ok[k][assign[t]] && self->merge_nb[t] < 0 && !merged[t]) {
-                    /* a blob that may hold an unresolved neighbour mixes two people's colour */
-                    mvt_trk_app_update(&tr->app, self->chroma[k][assign[t]]);
-                }
-            } else {
-                self->counters.numeric_faults++;
+            if (assign[t] >= 0) {
+                apply_measurement(self, t, k, &self->meas[k][assign[t]], assign[t], merged[t]);
+            } else if (self->top_ok[t] && apply_measurement(self, t, k, &self->top_meas[t], -1, 0)) {
+                self->counters.mask_top_updates++;
             }
         }
     }

@@ -245,6 +245,9 @@ typedef struct mvt_counters {
                                          in 3D (mvt_trk_reacquire) */
     uint64_t identities_recovered;    /* tracks confirmed with the identity of a track lost within
                                          recover_s (identity recovery) */
+    uint64_t mask_top_updates;        /* track-camera updates with the top of the foreground in the
+                                         track's own column, where no blob's reported top showed
+                                         the head (views with masks; mvt_trk_occl.c) */
 } mvt_counters_t;
 
 /* A person's appearance as the blobs' colour shows it (mvt_trk_app.c): the blob's mean hue h and
@@ -383,6 +386,9 @@ typedef struct mvt_tracker {
     mvt_real ev_llr[MVT_MAX_TARGETS];      /* this frame's existence evidence of each track */
     uint32_t visible[MVT_MAX_TARGETS];     /* this frame: the observed cameras whose picture holds
                                               each track's predicted head (mvt_trk_delete) */
+    mvt_pkf_meas_t top_meas[MVT_MAX_TARGETS]; /* this camera: the head measured as the top of the
+                                                 foreground in the track's column (mvt_trk_occl.c) */
+    uint8_t top_ok[MVT_MAX_TARGETS];          /* ... found, inside the gate, nobody else's */
     mvt_real birth_rate;        /* births tried per frame, averaged over MVT_TRK_BIRTH_RATE_S
                                    (mvt_trk_init.c: the prior odds of a new track) */
     int64_t birth_rate_us;      /* the frame it was last updated, 0: never */

@@ -7,9 +7,14 @@
  * covariance and is deleted after coast_max_s, although every camera that cannot see it shows
  * exactly where it may be: inside the blob's box.
  *
- * For each confirmed track that camera k did not update, every blob of camera k that another
- * track took (or that was withheld as a merged pair's) and whose box holds the track's predicted
- * head is a hypothesis "hidden in this blob". Where camera k sent its foreground mask, the
+ * First, where camera k sent its foreground mask, a confirmed track it did not update may still be
+ * seen there: a merged blob reports the top of the whole region, and a lower head that stands out
+ * of the merged outline in its own column is in no detection. Such a top, nobody else's and in the
+ * track's gate, is the track's measurement in that view (mask_top; docs/tracking.md, "A head that
+ * stands out of a merged blob").
+ *
+ * Otherwise every blob of camera k that another track took (or that was withheld as a merged
+ * pair's) and whose box holds the track's predicted head is a hypothesis "hidden in this blob". Where camera k sent its foreground mask, the
  * mask must also hold something near the predicted head: a hidden head is foreground (merged into
  * another's silhouette, or behind a body), and the background a box spans beside and between its
  * people hides nobody (docs/tracking.md, "Hidden only in foreground"). The head then lies in the
@@ -338,6 +343,71 @@ static mvt_real extent_llr(const mvt_tracker_t *self, const mvt_view_t *view, in
     return llr;
 }
 
+/* Half a head's width (m): the band searched for a head's top in its own column. */
+#define TOP_HEAD_HALFWIDTH_M MVT_R(0.11)
+/* A head's top is narrower than this (m) in its first two mask rows; a wider top is a shoulder
+ * line or two heads side by side, and says nothing of one head's column. */
+#define TOP_MAX_WIDTH_M MVT_R(0.3)
+/* Above a head's top the picture is background for this far (m) at its depth: a torso fragment
+ * under a hole in the mask, or a bump of a shoulder, has the head above it. */
+#define TOP_CLEAR_M MVT_R(0.3)
+/* A silhouette's outline has bumps a head's width apart (shoulders, arms, a neighbour's head), so
+ * a top is taken for the track's head only nearer its prediction than a detection is: chi-square
+ * 2 dof, 99 % (the detections' gate, gate_chi2, is 99.9 %). */
+#define TOP_GATE_CHI2 MVT_R(9.21)
+
+/* A confirmed track that camera k did not update, with a foreground mask from that camera: is its
+ * head a top of the silhouette in its own column? A blob's reported point is the top of the whole
+ * region, so where two people's silhouettes merged the lower head is in no detection although
+ * it may stand out of the outline in its own column; the track then gets that top as its
+ * measurement (top_meas, top_ok), as from a detection of its own. The top must be nobody else's:
+ * not the reported top of a blob another track took (within 3 sigma), not inside or on top of
+ * another confirmed track's predicted silhouette (where the outline may be their head or body),
+ * and inside the track's chi-square gate (TOP_GATE_CHI2). Returns 1 when found. */
+static int mask_top(mvt_tracker_t *self, const mvt_view_t *view, int k, int t, const mvt_pkf_pred_t *p,
+                    occl_others_t *o)
+{
+    const mvt_camera_t *cam = &self->cams[k];
+    const mvt_real s = (mvt_real)view->mask->scale;
+    const mvt_real sig2 = cam->sigma_px * cam->sigma_px + s * s; /* the detector's noise and a mask pixel */
+    const mvt_real sig = MVT_SQRT(sig2);
+    const mvt_real su = MVT_SQRT(p->hph[0] + sig2), sv = MVT_SQRT(p->hph[2] + sig2);
+    const mvt_real head_px = cam->fx * TOP_HEAD_HALFWIDTH_M / p->depth_m;
+    mvt_real uv[2];
+    if (!mvt_mask_top_in_band(view->mask, p->h[0], head_px + su, p->h[1] - MVT_R(3.0) * sv, p->h[1] + MVT_R(3.0) * sv,
+                              cam->fx * TOP_MAX_WIDTH_M / p->depth_m + MVT_R(2.0) * s,
+                              cam->fx * TOP_CLEAR_M / p->depth_m, uv)) {
+        return 0;
+    }
+    for (int d = 0; d < self->num_meas[k]; d++) {
+        const mvt_real du = uv[0] - view->det[d].u, dv = uv[1] - view->det[d].v;
+        if (self->used[k][d] && du * du + dv * dv < MVT_R(9.0) * (sig2 + self->meas[k][d].var_px2)) {
+            return 0; /* that blob's top: its track's */
+        }
+    }
+    if (o->n < 0) {
+        gather_others(self, k, o);
+    }
+    for (int i = 0; i < o->n; i++) {
+        const mvt_real *sil = o->sil[i];
+        if (o->who[i] == t || !o->ok[i]) {
+            continue;
+        }
+        const mvt_real slack = o->heads[i][3] + sig; /* three of their head's sd in v, and ours */
+        if (uv[0] >= sil[0] - sig && uv[0] <= sil[2] + sig && uv[1] >= sil[1] - slack && uv[1] <= sil[3]) {
+            return 0;
+        }
+    }
+    mvt_pkf_meas_t *m = &self->top_meas[t];
+    mvt_pkf_innov_t in;
+    if (mvt_pkf_meas_make(cam, uv, sig, m) != MVT_OK ||
+        mvt_pkf_innovation_from(&self->pred[t], m, NULL, &in) != MVT_OK || !(in.d2 <= TOP_GATE_CHI2)) {
+        return 0;
+    }
+    self->top_ok[t] = 1;
+    return 1;
+}
+
 void mvt_trk_occlusion(mvt_tracker_t *self, const mvt_view_t *view, int k, const int assign[MVT_MAX_TARGETS])
 {
     const mvt_tracker_config_t *c = &self->cfg;
@@ -380,6 +450,9 @@ void mvt_trk_occlusion(mvt_tracker_t *self, const mvt_view_t *view, int k, const
         const int masked = has_mask(view);
         const int fg_near = masked && mvt_mask_fg_near(view->mask, p->h, slack);
         const int hideable = !masked || fg_near;
+        if (fg_near && mask_top(self, view, k, t, p, &others)) {
+            continue; /* seen in its own column: updated with the detections (mvt_tracker.c) */
+        }
         int best = -1;
         mvt_real best_lik = MVT_R(0.0), best_lo = MVT_R(0.0), best_hi = MVT_R(0.0);
         for (int d = 0; d < nd && hideable; d++) {

@@ -1,11 +1,13 @@
 /* Particle filter: mask decoding (valid and hostile runs), likelihood images against a direct
  * double-precision 2D convolution, weights, resampling, estimates, and the tracker end to end on
  * painted masks (two people, reproducible with a seed). */
+#include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include <cmocka.h>
 
@@ -87,6 +89,105 @@ static void test_mask_fg_near_matches_brute_force(void **state)
     static mvt_mask_t empty;
     memset(&empty, 0, sizeof(empty));
     assert_int_equal(mvt_mask_fg_near(&empty, mid, 1e30f), 0);
+}
+
+/* Paints a person at mask pixel column cx: a head disc of radius 3 whose top is row top, a body
+ * 11 pixels wide from row top + 6 down to row bottom; a gap of `hole` background rows under the
+ * head (a fragmenting hole). */
+static void paint_person(int cx, int top, int bottom, int hole)
+{
+    const int w = g_mask.width;
+    for (int y = top; y <= top + 6 && y < g_mask.height; y++) {
+        for (int x = cx - 3; x <= cx + 3; x++) {
+            if ((x - cx) * (x - cx) + (y - top - 3) * (y - top - 3) <= 10 && x >= 0 && x < w && y >= 0) {
+                g_mask.fg[y * w + x] = 1;
+            }
+        }
+    }
+    for (int y = top + 6 + hole; y <= bottom && y < g_mask.height; y++) {
+        for (int x = cx - 5; x <= cx + 5; x++) {
+            if (x >= 0 && x < w) {
+                g_mask.fg[y * w + x] = 1;
+            }
+        }
+    }
+}
+
+/* The expected point of a top at mask row r: the mean column of the top two rows' foreground over
+ * columns [lo, hi] (the top run and one beside each end), the row's upper quarter; scale s. */
+static void top_point(int r, int lo, int hi, int s, double out[2])
+{
+    double sum = 0;
+    int n = 0;
+    for (int x = lo; x <= hi; x++) {
+        if (g_mask.fg[r * g_mask.width + x] || g_mask.fg[(r + 1) * g_mask.width + x]) {
+            sum += x;
+            n++;
+        }
+    }
+    out[0] = (sum / n + 0.5) * s - 0.5;
+    out[1] = r * s - 0.5 + 0.25 * s;
+}
+
+/* mvt_mask_top_in_band on painted people (scale 4, 96 x 72 mask): a head's top in its own band;
+ * the lower of two merged heads in its band; nothing where the band holds only the slope of a
+ * head's side, a torso fragment under a hole, a shoulder line, a head cut by the picture's top, or
+ * the inside of a silhouette; and the hostile arguments. */
+static void test_mask_top_in_band_finds_heads_only(void **state)
+{
+    (void)state;
+    const int s = 4, w = 96, h = 72;
+    memset(&g_mask, 0, sizeof(g_mask));
+    g_mask.width = w;
+    g_mask.height = h;
+    g_mask.scale = s;
+    paint_person(30, 20, 70, 0); /* tall person, head top row 20 */
+    paint_person(38, 26, 70, 0); /* shorter neighbour, merged into one silhouette, head top row 26 */
+    paint_person(70, 30, 70, 2); /* a person with a hole under the head */
+    const mvt_real max_w = 9.0f * s, clear = 6.0f * s; /* 9 mask pixels wide (the body: 11), 6 rows clear */
+    mvt_real uv[2];
+    double want[2];
+    /* the tall head in a band around it */
+    assert_int_equal(mvt_mask_top_in_band(&g_mask, 30 * s + 2, 2 * s, 15 * s, 30 * s, max_w, clear, uv), 1);
+    top_point(20, 28, 32, s, want);
+    assert_true(fabs((double)uv[0] - want[0]) < 1e-3 && fabs((double)uv[1] - want[1]) < 1e-3);
+    assert_true(fabs((double)uv[0] - (30 * s + 1.5)) < 1e-3); /* the disc's middle column */
+    /* the lower head of the merged pair, in its own band (its top rows are its own) */
+    assert_int_equal(mvt_mask_top_in_band(&g_mask, 38 * s + 2, 1.5f * s, 22 * s, 34 * s, max_w, clear, uv), 1);
+    top_point(26, 36, 40, s, want);
+    assert_true(fabs((double)uv[0] - want[0]) < 1e-3 && fabs((double)uv[1] - want[1]) < 1e-3);
+    /* a band on the tall head's side: its first row is the slope, which rises out of the band */
+    assert_int_equal(mvt_mask_top_in_band(&g_mask, 33 * s + 2, 0.5f * s, 15 * s, 30 * s, max_w, clear, uv), 0);
+    /* the torso fragment under the hole: the head is above it */
+    assert_int_equal(mvt_mask_top_in_band(&g_mask, 70 * s + 2, 2 * s, 37 * s, 45 * s, max_w, clear, uv), 0);
+    /* ... the head itself is found, and with no clearance or width asked the fragment is a top */
+    assert_int_equal(mvt_mask_top_in_band(&g_mask, 70 * s + 2, 2 * s, 25 * s, 45 * s, max_w, clear, uv), 1);
+    assert_true(fabs((double)uv[1] - (30 * s - 0.5 + 0.25 * s)) < 1e-3);
+    assert_int_equal(mvt_mask_top_in_band(&g_mask, 70 * s + 2, 2 * s, 37 * s, 45 * s, 1e3f, 0, uv), 1);
+    assert_true(fabs((double)uv[1] - (38 * s - 0.5 + 0.25 * s)) < 1e-3);
+    /* a window inside a silhouette (the body below both heads): no top */
+    assert_int_equal(mvt_mask_top_in_band(&g_mask, 34 * s + 2, 2 * s, 40 * s, 60 * s, max_w, clear, uv), 0);
+    /* a top wider than max_width: a shoulder line (the fragment's 11 px top, asked for 6) */
+    assert_int_equal(mvt_mask_top_in_band(&g_mask, 70 * s + 2, 2 * s, 37 * s, 45 * s, 6.0f * s, 0, uv), 0);
+    /* a head cut by the picture's top edge */
+    memset(g_mask.fg, 0, sizeof(g_mask.fg));
+    paint_person(50, 0, 70, 0);
+    assert_int_equal(mvt_mask_top_in_band(&g_mask, 50 * s + 2, 2 * s, 0, 10 * s, max_w, clear, uv), 0);
+    /* ... one row lower it is a top (its clearance reaches the picture's edge) */
+    memset(g_mask.fg, 0, sizeof(g_mask.fg));
+    paint_person(50, 1, 70, 0);
+    assert_int_equal(mvt_mask_top_in_band(&g_mask, 50 * s + 2, 2 * s, 0, 10 * s, max_w, clear, uv), 1);
+    /* hostile arguments */
+    assert_int_equal(mvt_mask_top_in_band(&g_mask, NAN, 2 * s, 0, 10 * s, max_w, clear, uv), 0);
+    assert_int_equal(mvt_mask_top_in_band(&g_mask, 50 * s, -1, 0, 10 * s, max_w, clear, uv), 0);
+    assert_int_equal(mvt_mask_top_in_band(&g_mask, 50 * s, 2 * s, 10 * s, 0, max_w, clear, uv), 0);
+    assert_int_equal(mvt_mask_top_in_band(&g_mask, 50 * s, 2 * s, 0, INFINITY, max_w, clear, uv), 0);
+    assert_int_equal(mvt_mask_top_in_band(&g_mask, 50 * s, 2 * s, 0, 10 * s, max_w, -1, uv), 0);
+    assert_int_equal(mvt_mask_top_in_band(&g_mask, 1e30f, 2 * s, 0, 10 * s, max_w, clear, uv), 0);
+    assert_int_equal(mvt_mask_top_in_band(&g_mask, 50 * s, 1e30f, -1e30f, 1e30f, 1e30f, 1e30f, uv), 1);
+    static mvt_mask_t empty;
+    memset(&empty, 0, sizeof(empty));
+    assert_int_equal(mvt_mask_top_in_band(&empty, 50 * s, 2 * s, 0, 10 * s, max_w, clear, uv), 0);
 }
 
 static void test_mask_from_runs_hostile_rejected(void **state)
@@ -849,6 +950,7 @@ int main(void)
         cmocka_unit_test(test_mask_from_runs_valid_decodes),
         cmocka_unit_test(test_mask_from_runs_hostile_rejected),
         cmocka_unit_test(test_mask_fg_near_matches_brute_force),
+        cmocka_unit_test(test_mask_top_in_band_finds_heads_only),
         cmocka_unit_test(test_image_build_matches_direct_convolution),
         cmocka_unit_test(test_normalise_matches_double_and_ess),
         cmocka_unit_test(test_resample_systematic_copies_floor_or_ceil),
