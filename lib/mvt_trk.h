@@ -31,6 +31,11 @@ static inline int mvt_trk_popcount(uint32_t x)
 /* A track that fewer than two views place keeps its height within this many standard deviations
  * of the height last placed (mvt_trk_hold_height). */
 #define MVT_TRK_HEIGHT_BAND MVT_R(3.0)
+/* The lowest head top of a person standing, sitting or crouching, metres above the floor: a
+ * silhouette's top lower than this is a leg fragment or a shadow on the floor, not a head. The
+ * mask's tops measure only tracks whose head is at least this high (mvt_trk_occl.c); the particle
+ * filter's births use the same height (mvt_pft_config_t.birth_min_height_m, 1 m). */
+#define MVT_TRK_MIN_HEAD_M MVT_R(1.0)
 
 /* How long the boxes' evidence for a hidden person is remembered (need_llr), s: a second of frames
  * outweighs one noisy box edge, and a person who left stops being needed within a few seconds. */

@@ -450,7 +450,7 @@ void mvt_trk_occlusion(mvt_tracker_t *self, const mvt_view_t *view, int k, const
         const int masked = has_mask(view);
         const int fg_near = masked && mvt_mask_fg_near(view->mask, p->h, slack);
         const int hideable = !masked || fg_near;
-        if (fg_near && mask_top(self, view, k, t, p, &others)) {
+        if (fg_near && tr->s.x[2] >= MVT_TRK_MIN_HEAD_M && mask_top(self, view, k, t, p, &others)) {
             continue; /* seen in its own column: updated with the detections (mvt_tracker.c) */
         }
         int best = -1;
