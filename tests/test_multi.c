@@ -1459,8 +1459,8 @@ static void test_mvt_tracker_step_head_standing_out_of_merged_blob_measured(void
     assert_true(err_m < 0.7 * err_b);
     assert_true(dz_m < 0.03 && dz_m < dz_b);
     assert_true(tall_m < tall_b + 0.003);
-    /* a "person" 0.6 m tall (fails with MVT_TRK_MIN_HEAD_M 0: 267 tops) (a shadow or a leg fragment's top, which the blobs report as well):
-     * no head, so the masks' tops never measure it (MVT_TRK_MIN_HEAD_M) */
+    /* a "person" 0.6 m tall (a shadow or a leg fragment's top, which the blobs report as well): no
+     * head, so the masks' tops never measure it (MVT_TRK_MIN_HEAD_M; with 0 there: 267 tops) */
     side_by_side(1, 0.6f, &dz_m, &ids_m, &tall_m);
     assert_int_equal(g_tracker.counters.mask_top_updates, 0);
     assert_true(g_tracker.counters.births >= 2);
