@@ -144,8 +144,8 @@ int mvt_mask_top_in_band(const mvt_mask_t *mask, mvt_real u, mvt_real half_w, mv
     }
     int a, b;
     run_through(mask, r, c, &a, &b);
-    if ((mvt_real)(b - a + 1) * s > max_width_px) {
-        return 0;
+    if ((mvt_real)(b - a + 1) * s > max_width_px || a == 0 || b == mask->width - 1) {
+        return 0; /* too wide for a head, or cut by the picture's side (a slope may go on beyond) */
     }
     /* a top: background above it, across the band and beside the run's ends, for n_clear rows (or
      * up to the picture's top). Otherwise it is a slope rising out of the band (whose first row in

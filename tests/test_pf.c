@@ -177,6 +177,15 @@ static void test_mask_top_in_band_finds_heads_only(void **state)
     memset(g_mask.fg, 0, sizeof(g_mask.fg));
     paint_person(50, 1, 70, 0);
     assert_int_equal(mvt_mask_top_in_band(&g_mask, 50 * s + 2, 2 * s, 0, 10 * s, max_w, clear, uv), 1);
+    /* ... and a head cut by the picture's side: its outline may rise beyond the edge */
+    memset(g_mask.fg, 0, sizeof(g_mask.fg));
+    paint_person(1, 20, 70, 0);
+    assert_int_equal(mvt_mask_top_in_band(&g_mask, 1 * s + 2, 2 * s, 15 * s, 30 * s, max_w, clear, uv), 0);
+    paint_person(w - 2, 20, 70, 0);
+    assert_int_equal(mvt_mask_top_in_band(&g_mask, (w - 2) * s + 2, 2 * s, 15 * s, 30 * s, max_w, clear, uv), 0);
+    memset(g_mask.fg, 0, sizeof(g_mask.fg));
+    paint_person(4, 20, 70, 0); /* its head clear of the edge */
+    assert_int_equal(mvt_mask_top_in_band(&g_mask, 4 * s + 2, 2 * s, 15 * s, 30 * s, max_w, clear, uv), 1);
     /* hostile arguments */
     assert_int_equal(mvt_mask_top_in_band(&g_mask, NAN, 2 * s, 0, 10 * s, max_w, clear, uv), 0);
     assert_int_equal(mvt_mask_top_in_band(&g_mask, 50 * s, -1, 0, 10 * s, max_w, clear, uv), 0);
