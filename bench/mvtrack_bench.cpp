@@ -23,6 +23,10 @@
  *                              0.3 false alarms per camera per frame; 3000 frames (2 min), each
  *                              step timed alone, the first 100 (births) excluded; also prints the
  *                              p99 and max and how many tracks were confirmed
+ *   tracker_frame_8cam_16people_masks  the same with each camera's 192 x 144 foreground mask (a
+ *                              head over a body per person, painted outside the timed step):
+ *                              empty places, hidden tracks and heads standing out of merged blobs
+ *                              read from the masks; also prints how many tops were measured
  *   pf_frame_5cam_4targets     a whole mvt_pft_step (--mode pf): 5 cameras with 192 x 144 masks
  *                              and hue/saturation (the likelihood images are built inside the
  *                              step), 4 people walking, 1000 particles each, MS+C; 600 frames,
@@ -366,6 +370,129 @@ struct EigenImm {
     }
 };
 
+/* Sets the mask pixels whose centres lie in the raw-pixel rectangle [u0, u1] x [v0, v1]. */
+void paint_rect(mvt_mask_t &m, double u0, double v0, double u1, double v1)
+{
+    const int a = std::max(0, (int)std::ceil((u0 - 1.5) / m.scale));
+    const int b = std::min(m.width - 1, (int)std::floor((u1 - 1.5) / m.scale));
+    const int c = std::max(0, (int)std::ceil((v0 - 1.5) / m.scale));
+    const int d = std::min(m.height - 1, (int)std::floor((v1 - 1.5) / m.scale));
+    for (int v = c; v <= d; v++) {
+        for (int u = a; u <= b; u++) {
+            m.num_fg += !m.fg[v * m.width + u];
+            m.fg[v * m.width + u] = 1;
+        }
+    }
+}
+
+/* tracker_frame_8cam_16people (masks: the _masks variant, each camera also sending a 192 x 144
+ * foreground mask of the people, a head over a body, painted outside the timed step). */
+void bench_tracker_8cam(bool masks)
+{
+    static mvt_tracker_t tr;
+    static mvt_frame_t fr;
+    static mvt_output_t out;
+    const int nc = 8, np = 16, frames = 3000, skip = 100;
+    static mvt_camera_t cams[8];
+    static mvt_mask_t mk[8];
+    for (int k = 0; k < nc; k++) {
+        const double a = 2 * M_PI * k / nc;
+        const double pos[3] = {4 + 4.1 * std::cos(a), 3.5 + 3.6 * std::sin(a), 2.8};
+        const double tgt[3] = {4, 3.5, 0.9};
+        mvt_camera_params_t p;
+        look_at(&p, pos, tgt, 380 + 10 * k, -0.2);
+        mvt_cam_init(&cams[k], &p);
+    }
+    mvt_tracker_config_t cfg;
+    mvt_tracker_config_default(&cfg);
+    cfg.volume_min[0] = 0; cfg.volume_min[1] = 0; cfg.volume_min[2] = 0;
+    cfg.volume_max[0] = 8; cfg.volume_max[1] = 7; cfg.volume_max[2] = 2.5f;
+    mvt_tracker_init(&tr, &cfg, cams, nc);
+    unsigned long long lcg = 88172645463325252ull;
+    auto rnd = [&]() { lcg = lcg * 6364136223846793005ull + 1442695040888963407ull; return (double)(lcg >> 11) / 9007199254740992.0; };
+    double r[16], th[16], w[16], h[16];
+    for (int i = 0; i < np; i++) {
+        r[i] = 0.5 + 0.18 * i;
+        th[i] = rnd() * 2 * M_PI;
+        w[i] = (0.6 + 0.6 * rnd()) / r[i] * (i % 2 ? 1 : -1);
+        h[i] = 1.6 + 0.25 * rnd();
+    }
+    std::vector<double> ns;
+    int max_conf = 0, conf_sum = 0;
+    for (int f = 0; f < frames; f++) {
+        const double t = f * 0.04;
+        fr.utime_us = 1000000 + (int64_t)f * 40000;
+        for (int k = 0; k < nc; k++) {
+            mvt_view_t *v = &fr.views[k];
+            v->observed = 1;
+            v->utime_us = fr.utime_us;
+            v->num_detections = 0;
+            v->mask = masks ? &mk[k] : nullptr;
+            if (masks) {
+                mk[k].width = 192;
+                mk[k].height = 144;
+                mk[k].scale = 4;
+                mk[k].num_fg = 0;
+                std::memset(mk[k].fg, 0, 192 * 144);
+            }
+            for (int i = 0; i < np; i++) {
+                const mvt_real X[3] = {(mvt_real)(4 + r[i] * std::cos(th[i] + w[i] * t)),
+                                       (mvt_real)(3.5 + r[i] * std::sin(th[i] + w[i] * t)), (mvt_real)h[i]};
+                mvt_real uv[2];
+                const bool missed = rnd() < 0.1; /* drawn first: the same draws as without masks */
+                if (mvt_cam_project(&cams[k], X, uv, nullptr) != MVT_OK) continue;
+                if (masks) { /* a head 8 px wide and 16 px high over a body 50 px wide */
+                    paint_rect(mk[k], uv[0] - 4, uv[1], uv[0] + 4, uv[1] + 16);
+                    paint_rect(mk[k], uv[0] - 25, uv[1] + 16, uv[0] + 25, uv[1] + 160);
+                }
+                if (missed) continue;
+                mvt_detection_t *d = &v->det[v->num_detections++];
+                d->u = uv[0] + (mvt_real)(2 * (rnd() + rnd() + rnd() - 1.5) * 1.414);
+                d->v = uv[1] + (mvt_real)(2 * (rnd() + rnd() + rnd() - 1.5) * 1.414);
+                d->sigma_px = 2;
+                d->score = 1;
+                /* a body-sized box under the head, so the occlusion step has blobs to test */
+                d->box[0] = d->u - 25;
+                d->box[1] = d->v;
+                d->box[2] = d->u + 25;
+                d->box[3] = d->v + 160;
+            }
+            if (rnd() < 0.3) {
+                mvt_detection_t *d = &v->det[v->num_detections++];
+                d->u = (mvt_real)(rnd() * 767);
+                d->v = (mvt_real)(rnd() * 575);
+                d->sigma_px = 2;
+                d->score = 1;
+                d->box[0] = d->u - 15;
+                d->box[1] = d->v;
+                d->box[2] = d->u + 15;
+                d->box[3] = d->v + 90;
+            }
+        }
+        const auto t0 = std::chrono::steady_clock::now();
+        mvt_tracker_step(&tr, &fr, &out);
+        const auto t1 = std::chrono::steady_clock::now();
+        if (f >= skip) {
+            ns.push_back(std::chrono::duration<double, std::nano>(t1 - t0).count());
+            int conf = 0;
+            for (int i = 0; i < out.num_tracks; i++) conf += out.tracks[i].status != MVT_TRACK_TENTATIVE;
+            max_conf = std::max(max_conf, conf);
+            conf_sum += conf;
+        }
+    }
+    std::sort(ns.begin(), ns.end());
+    std::printf("{\"bench\": \"%s\", \"median_ns\": %.1f, \"p99_ns\": %.1f, "
+                "\"max_ns\": %.1f, \"runs\": %zu, \"mean_confirmed_tracks\": %.2f, \"births\": %llu}\n",
+                masks ? "tracker_frame_8cam_16people_masks" : "tracker_frame_8cam_16people", ns[ns.size() / 2], ns[ns.size() * 99 / 100], ns.back(), ns.size(),
+                (double)conf_sum / (double)ns.size(), (unsigned long long)tr.counters.births);
+    if (masks) {
+        std::printf("{\"bench\": \"tracker_frame_8cam_16people_masks.tops\", \"mask_top_updates\": %llu, "
+                    "\"occluded_updates\": %llu}\n", (unsigned long long)tr.counters.mask_top_updates,
+                    (unsigned long long)tr.counters.occluded_updates);
+    }
+    std::fflush(stdout);
+    }
+
 /* Paints person p's body (a vertical cylinder of radius 0.2 m under the head point) into a mask. */
 void paint_body(const mvt_camera_t &cam, mvt_mask_t &m, const mvt_real head[3], uint8_t hue, uint8_t sat)
 {
@@ -471,11 +598,12 @@ int main(int argc, char **argv)
     for (const auto &w : want) {
         if (w == "--help" || w == "-h") {
             std::printf("usage: mvtrack-bench [filter_update_5cam] [tracker_frame_5cam_1target] "
-                        "[tracker_frame_8cam_16people] [pf_frame_5cam_4targets] [detect_frame_768x576]\n"
+                        "[tracker_frame_8cam_16people] [tracker_frame_8cam_16people_masks] [pf_frame_5cam_4targets] [detect_frame_768x576]\n"
                         "Prints one JSON object per benchmark (peers: NAME.eigen).\n");
             return 0;
         }
         if (w != "filter_update_5cam" && w != "tracker_frame_5cam_1target" && w != "tracker_frame_8cam_16people" &&
+            w != "tracker_frame_8cam_16people_masks" &&
             w != "pf_frame_5cam_4targets" && w != "detect_frame_768x576") {
             std::fprintf(stderr, "mvtrack-bench: unknown benchmark '%s'\n", w.c_str());
             return 2;
@@ -607,88 +735,10 @@ int main(int argc, char **argv)
         });
     }
     if (enabled("tracker_frame_8cam_16people")) {
-        static mvt_tracker_t tr;
-        static mvt_frame_t fr;
-        static mvt_output_t out;
-        const int nc = 8, np = 16, frames = 3000, skip = 100;
-        static mvt_camera_t cams[8];
-        for (int k = 0; k < nc; k++) {
-            const double a = 2 * M_PI * k / nc;
-            const double pos[3] = {4 + 4.1 * std::cos(a), 3.5 + 3.6 * std::sin(a), 2.8};
-            const double tgt[3] = {4, 3.5, 0.9};
-            mvt_camera_params_t p;
-            look_at(&p, pos, tgt, 380 + 10 * k, -0.2);
-            mvt_cam_init(&cams[k], &p);
-        }
-        mvt_tracker_config_t cfg;
-        mvt_tracker_config_default(&cfg);
-        cfg.volume_min[0] = 0; cfg.volume_min[1] = 0; cfg.volume_min[2] = 0;
-        cfg.volume_max[0] = 8; cfg.volume_max[1] = 7; cfg.volume_max[2] = 2.5f;
-        mvt_tracker_init(&tr, &cfg, cams, nc);
-        unsigned long long lcg = 88172645463325252ull;
-        auto rnd = [&]() { lcg = lcg * 6364136223846793005ull + 1442695040888963407ull; return (double)(lcg >> 11) / 9007199254740992.0; };
-        double r[16], th[16], w[16], h[16];
-        for (int i = 0; i < np; i++) {
-            r[i] = 0.5 + 0.18 * i;
-            th[i] = rnd() * 2 * M_PI;
-            w[i] = (0.6 + 0.6 * rnd()) / r[i] * (i % 2 ? 1 : -1);
-            h[i] = 1.6 + 0.25 * rnd();
-        }
-        std::vector<double> ns;
-        int max_conf = 0, conf_sum = 0;
-        for (int f = 0; f < frames; f++) {
-            const double t = f * 0.04;
-            fr.utime_us = 1000000 + (int64_t)f * 40000;
-            for (int k = 0; k < nc; k++) {
-                mvt_view_t *v = &fr.views[k];
-                v->observed = 1;
-                v->utime_us = fr.utime_us;
-                v->num_detections = 0;
-                for (int i = 0; i < np; i++) {
-                    const mvt_real X[3] = {(mvt_real)(4 + r[i] * std::cos(th[i] + w[i] * t)),
-                                           (mvt_real)(3.5 + r[i] * std::sin(th[i] + w[i] * t)), (mvt_real)h[i]};
-                    mvt_real uv[2];
-                    if (rnd() < 0.1 || mvt_cam_project(&cams[k], X, uv, nullptr) != MVT_OK) continue;
-                    mvt_detection_t *d = &v->det[v->num_detections++];
-                    d->u = uv[0] + (mvt_real)(2 * (rnd() + rnd() + rnd() - 1.5) * 1.414);
-                    d->v = uv[1] + (mvt_real)(2 * (rnd() + rnd() + rnd() - 1.5) * 1.414);
-                    d->sigma_px = 2;
-                    d->score = 1;
-                    /* a body-sized box under the head, so the occlusion step has blobs to test */
-                    d->box[0] = d->u - 25;
-                    d->box[1] = d->v;
-                    d->box[2] = d->u + 25;
-                    d->box[3] = d->v + 160;
-                }
-                if (rnd() < 0.3) {
-                    mvt_detection_t *d = &v->det[v->num_detections++];
-                    d->u = (mvt_real)(rnd() * 767);
-                    d->v = (mvt_real)(rnd() * 575);
-                    d->sigma_px = 2;
-                    d->score = 1;
-                    d->box[0] = d->u - 15;
-                    d->box[1] = d->v;
-                    d->box[2] = d->u + 15;
-                    d->box[3] = d->v + 90;
-                }
-            }
-            const auto t0 = std::chrono::steady_clock::now();
-            mvt_tracker_step(&tr, &fr, &out);
-            const auto t1 = std::chrono::steady_clock::now();
-            if (f >= skip) {
-                ns.push_back(std::chrono::duration<double, std::nano>(t1 - t0).count());
-                int conf = 0;
-                for (int i = 0; i < out.num_tracks; i++) conf += out.tracks[i].status != MVT_TRACK_TENTATIVE;
-                max_conf = std::max(max_conf, conf);
-                conf_sum += conf;
-            }
-        }
-        std::sort(ns.begin(), ns.end());
-        std::printf("{\"bench\": \"tracker_frame_8cam_16people\", \"median_ns\": %.1f, \"p99_ns\": %.1f, "
-                    "\"max_ns\": %.1f, \"runs\": %zu, \"mean_confirmed_tracks\": %.2f, \"births\": %llu}\n",
-                    ns[ns.size() / 2], ns[ns.size() * 99 / 100], ns.back(), ns.size(),
-                    (double)conf_sum / (double)ns.size(), (unsigned long long)tr.counters.births);
-        std::fflush(stdout);
+        bench_tracker_8cam(false);
+    }
+    if (enabled("tracker_frame_8cam_16people_masks")) {
+        bench_tracker_8cam(true);
     }
     if (enabled("pf_frame_5cam_4targets")) {
         bench_pf(rig.cams);
