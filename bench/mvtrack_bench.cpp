@@ -385,6 +385,20 @@ void paint_rect(mvt_mask_t &m, double u0, double v0, double u1, double v1)
     }
 }
 
+/* Adds a detection at (u, v), sigma 2 px, with a box half_w wide either side and height_px below. */
+void add_blob(mvt_view_t *v, mvt_real u, mvt_real vv, mvt_real half_w, mvt_real height_px)
+{
+    mvt_detection_t *d = &v->det[v->num_detections++];
+    d->u = u;
+    d->v = vv;
+    d->sigma_px = 2;
+    d->score = 1;
+    d->box[0] = u - half_w;
+    d->box[1] = vv;
+    d->box[2] = u + half_w;
+    d->box[3] = vv + height_px;
+}
+
 /* tracker_frame_8cam_16people (masks: the _masks variant, each camera also sending a 192 x 144
  * foreground mask of the people, a head over a body, painted outside the timed step). */
 void bench_tracker_8cam(bool masks)
@@ -446,27 +460,13 @@ void bench_tracker_8cam(bool masks)
                     paint_rect(mk[k], uv[0] - 25, uv[1] + 16, uv[0] + 25, uv[1] + 160);
                 }
                 if (missed) continue;
-                mvt_detection_t *d = &v->det[v->num_detections++];
-                d->u = uv[0] + (mvt_real)(2 * (rnd() + rnd() + rnd() - 1.5) * 1.414);
-                d->v = uv[1] + (mvt_real)(2 * (rnd() + rnd() + rnd() - 1.5) * 1.414);
-                d->sigma_px = 2;
-                d->score = 1;
-                /* a body-sized box under the head, so the occlusion step has blobs to test */
-                d->box[0] = d->u - 25;
-                d->box[1] = d->v;
-                d->box[2] = d->u + 25;
-                d->box[3] = d->v + 160;
+                const mvt_real u = uv[0] + (mvt_real)(2 * (rnd() + rnd() + rnd() - 1.5) * 1.414);
+                const mvt_real vv = uv[1] + (mvt_real)(2 * (rnd() + rnd() + rnd() - 1.5) * 1.414);
+                add_blob(v, u, vv, 25, 160); /* a body-sized box, so the occlusion step has blobs to test */
             }
             if (rnd() < 0.3) {
-                mvt_detection_t *d = &v->det[v->num_detections++];
-                d->u = (mvt_real)(rnd() * 767);
-                d->v = (mvt_real)(rnd() * 575);
-                d->sigma_px = 2;
-                d->score = 1;
-                d->box[0] = d->u - 15;
-                d->box[1] = d->v;
-                d->box[2] = d->u + 15;
-                d->box[3] = d->v + 90;
+                const mvt_real u = (mvt_real)(rnd() * 767);
+                add_blob(v, u, (mvt_real)(rnd() * 575), 15, 90);
             }
         }
         const auto t0 = std::chrono::steady_clock::now();
