@@ -360,10 +360,11 @@ static mvt_real extent_llr(const mvt_tracker_t *self, const mvt_view_t *view, in
  * head a top of the silhouette in its own column? A blob's reported point is the top of the whole
  * region, so where two people's silhouettes merged the lower head is in no detection although
  * it may stand out of the outline in its own column; the track then gets that top as its
- * measurement (top_meas, top_ok), as from a detection of its own. The top must be nobody else's:
- * not the reported top of a blob another track took (within 3 sigma), not inside or on top of
- * another confirmed track's predicted silhouette (where the outline may be their head or body),
- * and inside the track's chi-square gate (TOP_GATE_CHI2). Returns 1 when found. */
+ * measurement (top_meas, top_ok), as from a detection of its own. The top must be no detection's
+ * and nobody else's: not within 3 sigma of any blob's reported top (association has decided that
+ * detection: given to a track, withheld as a merged pair's, or outside every gate), not inside
+ * or on top of another confirmed track's predicted silhouette (where the outline may be their
+ * head or body), and inside the track's chi-square gate (TOP_GATE_CHI2). Returns 1 when found. */
 static int mask_top(mvt_tracker_t *self, const mvt_view_t *view, int k, int t, const mvt_pkf_pred_t *p,
                     occl_others_t *o)
 {
@@ -381,8 +382,8 @@ static int mask_top(mvt_tracker_t *self, const mvt_view_t *view, int k, int t, c
     }
     for (int d = 0; d < self->num_meas[k]; d++) {
         const mvt_real du = uv[0] - view->det[d].u, dv = uv[1] - view->det[d].v;
-        if (self->used[k][d] && du * du + dv * dv < MVT_R(9.0) * (sig2 + self->meas[k][d].var_px2)) {
-            return 0; /* that blob's top: its track's */
+        if (du * du + dv * dv < MVT_R(9.0) * (sig2 + self->meas[k][d].var_px2)) {
+            return 0; /* a blob's reported top: association had its say (taken, withheld, gated out) */
         }
     }
     if (o->n < 0) {
