@@ -14,11 +14,12 @@
  * stands out of a merged blob").
  *
  * Otherwise every blob of camera k that another track took (or that was withheld as a merged
- * pair's) and whose box holds the track's predicted head is a hypothesis "hidden in this blob". Where camera k sent its foreground mask, the
- * mask must also hold something near the predicted head: a hidden head is foreground (merged into
- * another's silhouette, or behind a body), and the background a box spans beside and between its
- * people hides nobody (docs/tracking.md, "Hidden only in foreground"). The head then lies in the
- * box's column band, at least body_halfwidth_m (seen at the track's depth) inside the side edges,
+ * pair's) and whose box holds the track's predicted head is a hypothesis "hidden in this blob".
+ * Where camera k sent its foreground mask, the mask must also hold something near the predicted
+ * head: a hidden head is foreground (merged into another's silhouette, or behind a body), and the
+ * background a box spans beside and between its people hides nobody (docs/tracking.md, "Hidden
+ * only in foreground"). The head then lies in the box's column band, at least body_halfwidth_m
+ * (seen at the track's depth) inside the side edges,
  * widened by the detection's pixel sigma. The likeliest blob under a uniform position in the band
  * (the prior mass of the band over its width) constrains the track: its predicted column is
  * truncated to the band (mvt_cv_truncate, on the ground position: see below). A truncation moves
@@ -382,7 +383,8 @@ static int mask_top(mvt_tracker_t *self, const mvt_view_t *view, int k, int t, c
     }
     for (int d = 0; d < self->num_meas[k]; d++) {
         const mvt_real du = uv[0] - view->det[d].u, dv = uv[1] - view->det[d].v;
-        if (du * du + dv * dv < MVT_R(9.0) * (sig2 + self->meas[k][d].var_px2)) {
+        const mvt_real var = self->meas_ok[k][d] ? self->meas[k][d].var_px2 : sig2; /* undistort failed */
+        if (du * du + dv * dv < MVT_R(9.0) * (sig2 + var)) {
             return 0; /* a blob's reported top: association had its say (taken, withheld, gated out) */
         }
     }
