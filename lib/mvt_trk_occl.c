@@ -19,9 +19,9 @@
  * head: a hidden head is foreground (merged into another's silhouette, or behind a body), and the
  * background a box spans beside and between its people hides nobody (docs/tracking.md, "Hidden
  * only in foreground"). The head then lies in the box's column band, at least body_halfwidth_m
- * (seen at the track's depth) inside the side edges,
- * widened by the detection's pixel sigma. The likeliest blob under a uniform position in the band
- * (the prior mass of the band over its width) constrains the track: its predicted column is
+ * (seen at the track's depth) inside the side edges, widened by the detection's pixel sigma. The
+ * likeliest blob under a uniform position in the band (the prior mass of the band over its width)
+ * constrains the track: its predicted column is
  * truncated to the band (mvt_cv_truncate, on the ground position: see below). A truncation moves
  * a prior that sits inside a wide band only a little, and a hidden person's prior usually does:
  * the update does not drag the track onto the blob's centre (which a Gaussian pseudo-measurement
