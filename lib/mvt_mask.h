@@ -54,8 +54,9 @@ int mvt_mask_fg_near(const mvt_mask_t *mask, const mvt_real uv[2], mvt_real r);
  * A run wider than max_width_px raw pixels (a shoulder line, two heads side by side) says
  * nothing of one head's column: 0. Returns 1 with top_uv set, 0 when there is no such top, when it
  * is on the mask's first row or its run reaches the first or last column (a silhouette cut by the
- * picture's edge, whose outline may rise beyond it), when the mask is empty or an argument is not finite or negative. The
- * PKF's measurement of a head that a merged blob's reported top does not show (mvt_trk_occl.c).
+ * picture's edge, whose outline may rise beyond it), when the mask is empty or an argument is not
+ * finite or negative. The PKF's measurement of a head that a merged blob's reported top does not
+ * show (mvt_trk_occl.c).
  * O((half_w / scale + 1) * (v_hi - v_lo + clear_px) / scale + max_width_px / scale), no memory. */
 int mvt_mask_top_in_band(const mvt_mask_t *mask, mvt_real u, mvt_real half_w, mvt_real v_lo, mvt_real v_hi,
                          mvt_real max_width_px, mvt_real clear_px, mvt_real top_uv[2]);

@@ -396,8 +396,8 @@ static int mask_top(mvt_tracker_t *self, const mvt_view_t *view, int k, int t, c
         if (o->who[i] == t || !o->ok[i]) {
             continue;
         }
-        const mvt_real slack = o->heads[i][3] + sig; /* three of their head's sd in v, and ours */
-        if (uv[0] >= sil[0] - sig && uv[0] <= sil[2] + sig && uv[1] >= sil[1] - slack && uv[1] <= sil[3]) {
+        /* slack: our sd across, three of their head's sd and ours up and down */
+        if (mvt_trk_in_box(sil, uv, sig, o->heads[i][3] + sig)) {
             return 0;
         }
     }

@@ -1165,25 +1165,37 @@ static void test_mvt_tracker_step_ghost_two_views_refuted_by_three(void **state)
 /* Camera k's foreground mask at quarter resolution: the rectangles box[0..n-1] (raw pixels). */
 static mvt_mask_t g_masks[5];
 
-static void mask_of_boxes(int k, const mvt_real (*box)[4], int n)
+/* Camera k's mask, empty (192 x 144, scale 4) and attached to its view. */
+static mvt_mask_t *blank_mask(int k)
 {
     mvt_mask_t *m = &g_masks[k];
     memset(m, 0, sizeof(*m));
     m->width = 192;
     m->height = 144;
     m->scale = 4;
+    g_frame.views[k].mask = m;
+    return m;
+}
+
+static void set_fg(mvt_mask_t *m, int u, int v)
+{
+    m->num_fg += !m->fg[v * m->width + u];
+    m->fg[v * m->width + u] = 1;
+}
+
+static void mask_of_boxes(int k, const mvt_real (*box)[4], int n)
+{
+    mvt_mask_t *m = blank_mask(k);
     for (int i = 0; i < n; i++) {
         for (int v = 0; v < m->height; v++) {
             for (int u = 0; u < m->width; u++) {
                 const mvt_real cu = (mvt_real)(4 * u + 2), cv = (mvt_real)(4 * v + 2); /* pixel centre */
-                if (cu >= box[i][0] && cu <= box[i][2] && cv >= box[i][1] && cv <= box[i][3] && !m->fg[v * 192 + u]) {
-                    m->fg[v * 192 + u] = 1;
-                    m->num_fg++;
+                if (cu >= box[i][0] && cu <= box[i][2] && cv >= box[i][1] && cv <= box[i][3]) {
+                    set_fg(m, u, v);
                 }
             }
         }
     }
-    g_frame.views[k].mask = m;
 }
 
 /* Every box of camera k's view widened to hold gbox and half its width more on each side (a
@@ -1346,20 +1358,12 @@ static void test_mvt_tracker_step_contradicted_on_foreground_lasts_longer(void *
     assert_true(gone[1] >= 24 && gone[1] <= 27); /* 1 s */
 }
 
-/* A person stands right under camera 0 (outside its picture, next to its focal plane), seen by the
- * other four; camera 0 sends a blob of someone else each frame. The prediction in camera 0 lies far
- * outside its picture with an image spread wider than the picture: camera 0 must not update the
- * track (a gate that wide admits any blob and the linearised update drags the track). */
 /* Camera k's foreground mask at quarter resolution with people X[0..m-1] painted as they look: a
  * head disc (radius 0.11 m at its depth, its top at the head point) over a body column 0.4 m wide
  * from the chin to the feet. */
 static void mask_of_people(int k, const mvt_real X[][3], int m)
 {
-    mvt_mask_t *mk = &g_masks[k];
-    memset(mk, 0, sizeof(*mk));
-    mk->width = 192;
-    mk->height = 144;
-    mk->scale = 4;
+    mvt_mask_t *mk = blank_mask(k);
     const mvt_camera_t *cam = &g_cams[k];
     for (int i = 0; i < m; i++) {
         const mvt_real centre[3] = {X[i][0], X[i][1], X[i][2] - 0.11f}, chin[3] = {X[i][0], X[i][1], X[i][2] - 0.22f};
@@ -1381,22 +1385,21 @@ static void mask_of_people(int k, const mvt_real X[][3], int m)
                     const double axis = (double)cc[0] + a * ((double)fc[0] - (double)cc[0]);
                     in = fabs(pu - axis) <= wb;
                 }
-                if (in && !mk->fg[v * 192 + u]) {
-                    mk->fg[v * 192 + u] = 1;
-                    mk->num_fg++;
+                if (in) {
+                    set_fg(mk, u, v);
                 }
             }
         }
     }
-    g_frame.views[k].mask = mk;
 }
 
 /* Two people walk side by side across the room at 0.4 m/s, a tall one and, 0.44 m beside them, a
  * short one (1.88 and 1.55 m) who joined from aside in the first 2 s. Where their silhouettes
  * merge, the blob reports the tall head, and the short person is in no detection of that view,
- * although their head stands out of the merged outline in its own column. Returns the short
- * person's track's mean horizontal error (m) over the frames after joining (short_m: their height); *dz its largest height
- * error then, *ids the identities it had, *err_tall the tall person's mean horizontal error. */
+ * although their head stands out of the merged outline in its own column (short_m: their
+ * height). Returns the short person's track's mean horizontal error (m) over the frames after
+ * joining; *dz its largest height error then, *ids the identities it had, *err_tall the tall
+ * person's mean horizontal error. */
 static double side_by_side(int masks, mvt_real short_m, double *dz, int *ids, double *err_tall)
 {
     init();
@@ -1466,6 +1469,10 @@ static void test_mvt_tracker_step_head_standing_out_of_merged_blob_measured(void
     assert_true(g_tracker.counters.births >= 2);
 }
 
+/* A person stands right under camera 0 (outside its picture, next to its focal plane), seen by the
+ * other four; camera 0 sends a blob of someone else each frame. The prediction in camera 0 lies far
+ * outside its picture with an image spread wider than the picture: camera 0 must not update the
+ * track (a gate that wide admits any blob and the linearised update drags the track). */
 static void test_mvt_tracker_step_camera_that_cannot_see_does_not_update(void **state)
 {
     (void)state;
