@@ -71,6 +71,13 @@ static void usage(FILE *f)
             "                      (mvtrack.particles_t; default 0 = none)\n",
             MVTD_DEFAULT_URL, MVT_MAX_PARTICLES, MVT_MAX_PARTICLES);
     fprintf(f,
+            "  --lifecycle rules|body\n"
+            "                      pkf modes: how tracks are born, kept and ended. rules (default):\n"
+            "                      timers and rules; body: one model of a person, a head over a\n"
+            "                      body with its silhouette in every view, blobs explained as heads,\n"
+            "                      fragments or clutter, births from any number of views with a\n"
+            "                      prior on head height and the feet where visible, and a\n"
+            "                      probability of existence that confirms and deletes\n"
             "  --gate chi2|paper   association gate: innovation chi-square (default) or the paper's\n"
             "                      projected ellipsoid (Eq. 22-26)\n"
             "  --gate-chi2 X       chi-square threshold, 2 dof (default 13.8)\n"
@@ -262,7 +269,8 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
 {
     const char *rig_path = NULL, *in_url = MVTD_DEFAULT_URL, *out_url = NULL, *mode = "pkf", *gate = "chi2",
                *merge = "neither", *occlusion = "box", *particle_model = "column",
-               *state_path = NULL, *motion = NULL, *models = NULL, *pixels = "shared";
+               *state_path = NULL, *motion = NULL, *models = NULL, *pixels = "shared",
+               *lifecycle = "rules";
     int q_given = 0;
     double sigma_px = 2.0, deadline_ms = 20.0, gate_chi2 = 13.8;
     mvt_real q[3] = {MVT_R(0.5), MVT_R(0.5), MVT_R(0.05)};
@@ -279,7 +287,7 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
         {"particle-model", required_argument, 0, 'B'}, {"state", required_argument, 0, 'T'},
         {"motion", required_argument, 0, 'N'},   {"motion-models", required_argument, 0, 'W'},
         {"pixels", required_argument, 0, 'x'},   {"recover", required_argument, 0, 'R'},
-        {"outlier-persist", required_argument, 0, 'L'},
+        {"outlier-persist", required_argument, 0, 'L'}, {"lifecycle", required_argument, 0, 'Y'},
         {0, 0, 0, 0}};
     int opt;
     optind = 1; /* callable more than once (tests, fuzzer) */
@@ -287,7 +295,7 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
     double exclusion_m = -1.0; /* mode-dependent default */
     double recover_s = -1.0;   /* the library's default */
     double persist_s = -1.0;   /* the library's default */
-    while ((opt = getopt_long(argc, argv, "r:i:o:m:g:c:q:s:d:M:O:vhP:X:S:Q:B:T:N:W:x:R:L:", opts, NULL)) != -1) {
+    while ((opt = getopt_long(argc, argv, "r:i:o:m:g:c:q:s:d:M:O:vhP:X:S:Q:B:T:N:W:x:R:L:Y:", opts, NULL)) != -1) {
         switch (opt) {
         case 'r': rig_path = optarg; break;
         case 'i': in_url = optarg; break;
@@ -301,6 +309,7 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
         case 'N': motion = optarg; break;
         case 'W': models = optarg; break;
         case 'x': pixels = optarg; break;
+        case 'Y': lifecycle = optarg; break;
         case 'c':
             if (option_pos("--gate-chi2", optarg, &gate_chi2) != 0) {
                 return 2;
@@ -384,7 +393,9 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
     const int vi = motion == NULL ? (q_given ? 1 : 0) : option_choice("--motion", motion, motions, 2);
     static const char *const pixel_uses[] = {"shared", "independent"};
     const int xi = option_choice("--pixels", pixels, pixel_uses, 2);
-    if (mi < 0 || gi < 0 || ri < 0 || bi < 0 || oi < 0 || vi < 0 || xi < 0) {
+    static const char *const lifecycles[] = {"rules", "body"};
+    const int li = option_choice("--lifecycle", lifecycle, lifecycles, 2);
+    if (mi < 0 || gi < 0 || ri < 0 || bi < 0 || oi < 0 || vi < 0 || xi < 0 || li < 0) {
         return 2;
     }
     if (vi == 0 && q_given) {
@@ -401,6 +412,7 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
     cfg.merge = merge_of[ri];
     cfg.gate_chi2 = (mvt_real)gate_chi2;
     cfg.occlusion = oi == 0;
+    cfg.lifecycle = li == 1 ? MVT_LIFECYCLE_BODY : MVT_LIFECYCLE_RULES;
     if (exclusion_m < 0.0) { /* measured defaults: docs/particle-filter.md, docs/tracking.md */
         exclusion_m = mi >= 5 ? 0.5 : 0.4;
     }

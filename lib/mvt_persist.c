@@ -118,6 +118,7 @@ void mvt_tracker_save(const mvt_tracker_t *self, mvt_tracker_persist_t *out)
     memcpy(out->lost, self->lost, sizeof(out->lost));
     out->birth_rate = self->birth_rate;
     out->birth_rate_us = self->birth_rate_us;
+    memcpy(out->clutter_n, self->clutter_n, sizeof(out->clutter_n));
 }
 
 /* A lost identity (free, or kept for recovery): a place, a covariance with a non-negative
@@ -168,6 +169,11 @@ static int tracker_state_ok(const mvt_tracker_config_t *c, const mvt_tracker_per
         p->birth_rate_us > p->last_utime_us) {
         return 0;
     }
+    for (int k = 0; k < MVT_MAX_CAMERAS; k++) {
+        if (!(p->clutter_n[k] >= MVT_R(0.0) && p->clutter_n[k] <= (mvt_real)MVT_MAX_DETECTIONS)) {
+            return 0;
+        }
+    }
     int32_t ids[MVT_MAX_TARGETS];
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         const mvt_track_t *tr = &p->tracks[t];
@@ -180,7 +186,7 @@ static int tracker_state_ok(const mvt_tracker_config_t *c, const mvt_tracker_per
             !time_ok(tr->last_update_us, now) || !time_ok(tr->last_explained_us, now) ||
             !time_ok(tr->last_consistent_us, now) || !time_ok(tr->last_unrefuted_us, now) ||
             !time_ok(tr->last_needed_us, now) || tr->misses < 0 ||
-            !bank_ok(c, tr) || !lost_ok(c, &tr->held, now) || !isfinite(tr->exist_llr) ||
+            !bank_ok(c, tr) || !lost_ok(c, &tr->held, now) || !isfinite(tr->exist_llr) || !isfinite(tr->exist_lo) || tr->reserved2 != 0 ||
             !isfinite(tr->need_llr) || !seen_height_ok(c, tr) || !mvt_trk_app_ok(&tr->app) || !views_ok(tr, now) ||
             (tr->held.id != 0 && (tr->held.id != tr->id || tr->status != MVT_TRACK_TENTATIVE))) {
             return 0;
@@ -244,6 +250,7 @@ mvt_err_t mvt_tracker_resume(mvt_tracker_t *self, const mvt_tracker_persist_t *p
     self->counters = p->counters;
     self->birth_rate = p->birth_rate;
     self->birth_rate_us = p->birth_rate_us;
+    memcpy(self->clutter_n, p->clutter_n, sizeof(self->clutter_n));
     return MVT_OK;
 }
 

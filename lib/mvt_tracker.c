@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "mvt_linalg.h"
+#include "mvt_body.h"
 #include "mvt_trk.h"
 
 void mvt_tracker_config_default(mvt_tracker_config_t *c)
@@ -55,6 +56,29 @@ void mvt_tracker_config_default(mvt_tracker_config_t *c)
     c->contra_max_s = MVT_R(0.5);
     c->p_detect = MVT_R(0.9);
     c->recover_s = MVT_R(3.0);
+    c->lifecycle = MVT_LIFECYCLE_RULES;
+    c->head_height_m = MVT_R(1.70);
+    c->head_height_sd_m = MVT_R(0.15);
+    c->foot_sd_m = MVT_R(0.12);
+    c->birth_per_s = MVT_R(0.1);
+    c->stay_s = MVT_R(600.0);
+    c->exit_s = MVT_R(2.0);
+    c->clutter_per_frame = MVT_R(0.5);
+    c->exist_confirm = MVT_R(0.9);
+    c->exist_delete = MVT_R(0.01);
+}
+
+/* MVT_LIFECYCLE_BODY's parameters in their physical ranges (mvt_tracker.h). */
+static int body_config_ok(const mvt_tracker_config_t *c)
+{
+    return (c->lifecycle == MVT_LIFECYCLE_RULES || c->lifecycle == MVT_LIFECYCLE_BODY) &&
+           c->head_height_m >= MVT_R(1.0) && c->head_height_m <= MVT_R(2.5) && c->head_height_sd_m >= MVT_R(0.02) &&
+           c->head_height_sd_m <= MVT_R(0.5) && c->foot_sd_m >= MVT_R(0.01) && c->foot_sd_m <= MVT_R(0.5) &&
+           c->birth_per_s >= MVT_R(1e-4) && c->birth_per_s <= MVT_R(10.0) && c->stay_s > MVT_R(0.0) &&
+           isfinite(c->stay_s) && c->exit_s > MVT_R(0.0) && isfinite(c->exit_s) &&
+           c->clutter_per_frame >= MVT_R(0.01) && c->clutter_per_frame <= MVT_R(100.0) &&
+           c->exist_confirm > MVT_R(0.5) && c->exist_confirm < MVT_R(1.0) && c->exist_delete > MVT_R(0.0) &&
+           c->exist_delete < MVT_R(0.5) && c->body_halfwidth_m > MVT_R(0.0);
 }
 
 static int config_ok(const mvt_tracker_config_t *c)
@@ -65,7 +89,7 @@ static int config_ok(const mvt_tracker_config_t *c)
             return 0;
         }
     }
-    return mvt_imm_config_check(&c->motion) == MVT_OK && c->gate_chi2 > MVT_R(0.0) && c->paper_gamma > MVT_R(0.0) && c->paper_delta > MVT_R(0.0) &&
+    return body_config_ok(c) && mvt_imm_config_check(&c->motion) == MVT_OK && c->gate_chi2 > MVT_R(0.0) && c->paper_gamma > MVT_R(0.0) && c->paper_delta > MVT_R(0.0) &&
            c->birth_reproj_sigma > MVT_R(0.0) && c->birth_min_reproj_px >= MVT_R(0.0) && c->birth_min_views >= 2 &&
            c->birth_min_sep_m >= MVT_R(0.0) && c->init_vel_std_ms > MVT_R(0.0) && c->confirm_window >= 1 &&
            c->seen_min_views >= 1 && c->seen_max_std_m >= MVT_R(0.0) && isfinite(c->seen_max_std_m) &&
@@ -314,12 +338,17 @@ mvt_err_t mvt_tracker_step(mvt_tracker_t *self, const mvt_frame_t *frame, mvt_ou
     }
     const mvt_real dt = self->have_time ? mvt_us_to_s(frame->utime_us - self->last_utime_us) : MVT_R(0.0);
     const mvt_real forget = MVT_EXP(-dt / MVT_TRK_NEED_MEMORY_S);
-    mvt_trk_existence(self, dt);
+    const int body = self->cfg.lifecycle == MVT_LIFECYCLE_BODY && self->cfg.filter == MVT_FILTER_PROJECTIVE;
+    if (!body) {
+        mvt_trk_existence(self, dt);
+    }
     self->have_time = 1;
     self->last_utime_us = frame->utime_us;
     self->counters.frames++;
     prepare_measurements(self, frame);
-    mvt_trk_evidence_weights(self, frame);
+    if (!body) {
+        mvt_trk_evidence_weights(self, frame);
+    }
 
     /* observed cameras in capture-time order (insertion sort, stable, <= MVT_MAX_CAMERAS) */
     int order[MVT_MAX_CAMERAS];
@@ -351,6 +380,13 @@ mvt_err_t mvt_tracker_step(mvt_tracker_t *self, const mvt_frame_t *frame, mvt_ou
         self->tracks[t].cameras_fg = 0u;
         self->visible[t] = 0u;
         self->ev_llr[t] = MVT_R(0.0);
+    }
+    if (body) {
+        mvt_body_step(self, frame, order, n_order, dt);
+        if (out != NULL) {
+            mvt_tracker_output(self, frame->utime_us, out);
+        }
+        return MVT_OK;
     }
 
     mvt_trk_reacquire(self, frame, order, n_order);

@@ -62,6 +62,16 @@ typedef enum mvt_gate {
 
 enum { MVT_TRACK_TENTATIVE = 1, MVT_TRACK_CONFIRMED = 2, MVT_TRACK_COASTING = 3 };
 
+/* How tracks are born, kept and ended (projective filters only; the triangulating baseline keeps
+ * the rules). */
+typedef enum mvt_lifecycle {
+    MVT_LIFECYCLE_RULES = 0, /* timers and rules (mvt_trk_delete.c, mvt_trk_init.c, ...): hits in a
+                                window confirm, time unseen, hidden, contradicted deletes */
+    MVT_LIFECYCLE_BODY = 1   /* one model of a person (mvt_body.h): a head over a body, its
+                                visibility per camera, blobs explained as heads, fragments or
+                                clutter, a probability of existence that confirms and deletes */
+} mvt_lifecycle_t;
+
 typedef struct mvt_tracker_config {
     mvt_filter_t filter;        /* default MVT_FILTER_PROJECTIVE */
     mvt_pkf_lin_t lin;          /* default MVT_PKF_JACOBIAN */
@@ -154,6 +164,27 @@ typedef struct mvt_tracker_config {
                                    was lost (init_vel_std_ms times the time since it last saw its
                                    person, plus both covariances), at its head height, takes it
                                    back (mvt_trk_recover.c); >= 0 (0: off), default 3 */
+    /* MVT_LIFECYCLE_BODY's physical parameters (docs/tracking.md, "One model of a person"); it
+     * also reads p_detect, body_halfwidth_m, gate_chi2, motion, init_vel_std_ms, volume_*,
+     * volume_margin_m, exit_margin_m, max_pos_std_m and var_floor_m2 above. */
+    mvt_lifecycle_t lifecycle;  /* default MVT_LIFECYCLE_RULES */
+    mvt_real head_height_m;     /* mean head-top height of a standing adult, m, 1..2.5; default 1.70 */
+    mvt_real head_height_sd_m;  /* its spread over people and postures a newcomer has, m, 0.02..0.5;
+                                   default 0.15 */
+    mvt_real foot_sd_m;         /* a blob's bottom-centre (the feet) about the point under the head
+                                   top, horizontal standard deviation, m (stride, lean), 0.01..0.5;
+                                   default 0.12 */
+    mvt_real birth_per_s;       /* people entering the tracked volume per second, on average,
+                                   1e-4..10; default 0.1 */
+    mvt_real stay_s;            /* mean time a person stays in the volume, s, > 0; default 600 */
+    mvt_real exit_s;            /* mean time a person within exit_margin_m of a side wall takes to
+                                   walk out, s, > 0; default 2 */
+    mvt_real clutter_per_frame; /* a camera's false blobs per frame before it has been watched
+                                   (then learnt online over MVT_BODY_CLUTTER_S), 0.01..100;
+                                   default 0.5 */
+    mvt_real exist_confirm;     /* probability of existence that confirms a track, (0.5, 1);
+                                   default 0.9 */
+    mvt_real exist_delete;      /* ... under which a track is deleted, (0, 0.5); default 0.01 */
 } mvt_tracker_config_t;
 
 /* One detection as the core needs it (raw distorted pixels). */
@@ -245,6 +276,10 @@ typedef struct mvt_counters {
                                          in 3D (mvt_trk_reacquire) */
     uint64_t identities_recovered;    /* tracks confirmed with the identity of a track lost within
                                          recover_s (identity recovery) */
+    uint64_t deleted_unlikely;        /* MVT_LIFECYCLE_BODY: existence fell under exist_delete */
+    uint64_t fragments;               /* MVT_LIFECYCLE_BODY: blobs explained as a fragment of a
+                                         tracked body (no update, no birth) */
+    uint64_t foot_updates;            /* MVT_LIFECYCLE_BODY: updates with a blob's visible feet */
     uint64_t mask_top_updates;        /* track-camera updates with the top of the foreground in the
                                          track's own column, where no blob's reported top showed
                                          the head (views with masks; mvt_trk_occl.c) */
@@ -317,6 +352,8 @@ typedef struct mvt_track {
     uint32_t cameras_placed_prev; /* ... the frame before */
     mvt_imm_view_t view[MVT_MAX_CAMERAS]; /* per camera: was its last detection displaced, and by
                                              how much (mvt_imm_update_view) */
+    mvt_real exist_lo;          /* MVT_LIFECYCLE_BODY: log odds that its person is in the volume */
+    int32_t reserved2;          /* zero */
 } mvt_track_t;
 
 /* Multi-view birth candidates examined per frame (the best are kept; the excess is counted). */
@@ -326,6 +363,29 @@ typedef struct mvt_track {
 #if MVT_MAX_BIRTH_CANDIDATES < 1 || MVT_MAX_BIRTH_CANDIDATES > 4096
 #error "MVT_MAX_BIRTH_CANDIDATES must be in 1..4096"
 #endif
+
+/* MVT_LIFECYCLE_BODY's workspace (mvt_body.h): what one camera's pass computes for its steps, and
+ * the frame's birth material. Rebuilt every frame; nothing in it outlives the frame. */
+typedef struct mvt_body_cand {
+    mvt_real x[3];                      /* head top, m */
+    mvt_real P[9];                      /* its covariance */
+    mvt_real lo;                        /* log odds of a new person against clutter */
+    int16_t det[MVT_MAX_CAMERAS];       /* the detection of each camera it explains, or -1 */
+} mvt_body_cand_t;
+
+typedef struct mvt_body_ws {
+    mvt_real sil[MVT_MAX_CAMERAS][MVT_MAX_TARGETS][4]; /* each track's predicted silhouette box in
+                                                          each camera (u0 v0 u1 v1, raw px); u1 < u0:
+                                                          not in that picture */
+    mvt_real head[MVT_MAX_TARGETS][2];  /* this camera: predicted head, raw px */
+    mvt_real pd[MVT_MAX_TARGETS];       /* this camera: probability that the head is reported */
+    int16_t assign[MVT_MAX_TARGETS];    /* this camera: the detection that is the track's head, -1 */
+    int16_t frag[MVT_MAX_TARGETS];      /* this camera: a detection that is a fragment of it, -1 */
+    int16_t owner[MVT_MAX_DETECTIONS];  /* this camera: the track a detection belongs to, or -1 */
+    uint8_t free_det[MVT_MAX_CAMERAS][MVT_MAX_DETECTIONS]; /* this frame: explained by no track */
+    mvt_body_cand_t cand[MVT_MAX_BIRTH_CANDIDATES];
+    int num_cand;
+} mvt_body_ws_t;
 
 typedef struct mvt_birth_cand {
     int16_t n;                          /* views */
@@ -392,6 +452,9 @@ typedef struct mvt_tracker {
     mvt_real birth_rate;        /* births tried per frame, averaged over MVT_TRK_BIRTH_RATE_S
                                    (mvt_trk_init.c: the prior odds of a new track) */
     int64_t birth_rate_us;      /* the frame it was last updated, 0: never */
+    mvt_real clutter_n[MVT_MAX_CAMERAS]; /* MVT_LIFECYCLE_BODY: each camera's false blobs per
+                                            frame, learnt (mvt_body.c) */
+    mvt_body_ws_t body;         /* MVT_LIFECYCLE_BODY's workspace */
 } mvt_tracker_t;
 
 /* Fills cfg with the documented defaults (volume: a 10 m cube around the origin, z >= 0). */
@@ -430,6 +493,7 @@ typedef struct mvt_tracker_persist {
     mvt_lost_t lost[MVT_MAX_LOST];
     mvt_real birth_rate;
     int64_t birth_rate_us;
+    mvt_real clutter_n[MVT_MAX_CAMERAS];
 } mvt_tracker_persist_t;
 
 /* Copies the persistent part of the tracker into out (padding zeroed: equal states give equal

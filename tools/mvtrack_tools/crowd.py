@@ -232,7 +232,7 @@ class CameraFrame:
     dets: list[tuple[float, float, tuple[float, float, float, float], int]]  # u, v, bbox, source gid (0: FA)
 
 
-def _blob(cam, head: np.ndarray) -> tuple[float, float, float, float] | None:
+def body_box(cam, head: np.ndarray) -> tuple[float, float, float, float] | None:
     """Projected box of the body cylinder under the head point."""
     x, y, h = head
     pts = []
@@ -288,7 +288,7 @@ def detect(scene: Scene, rng: np.random.Generator) -> list[list[CameraFrame | No
                 uv = cam.project(head)[0]
                 if not cam.in_image(uv[None])[0]:
                     continue
-                box = _blob(cam, head)
+                box = body_box(cam, head)
                 foot = np.array([head[0], head[1], 0.0])
                 if box is None or cam.depth(foot)[0] <= 0.1:
                     continue

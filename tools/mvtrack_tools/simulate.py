@@ -27,7 +27,7 @@ import numpy as np
 from .progress import bar as progress_bar
 from .lcmio import LivePublisher, LogWriter, camera_frame, ground_truth
 from .rig import Rig, random_rig, smartroom
-from .crowd import DetectorModel, Scene, crowd_scene, detect, interaction_scene
+from .crowd import DetectorModel, Scene, body_box, crowd_scene, detect, interaction_scene
 from .scenes import Occlusions, WalkModel, head_detections
 
 T0_UTIME = 1_700_000_000_000_000
@@ -44,6 +44,22 @@ def experiment1(rig: Rig, seconds: float, var_px2: float, occlusion: bool, seed:
     return model, states, dets
 
 
+def _with_boxes(cam, head: np.ndarray, dets) -> list[tuple]:
+    """The person's blob box (the body under the head, cut by the picture) moved with each detection's
+    offset from the true head: the blob is where the detector put its top."""
+    box = body_box(cam, head)
+    if box is None:
+        return [(u, v) for (u, v, _) in dets]
+    true_uv = cam.project(head[None])[0]
+    out = []
+    for (u, v, _) in dets:
+        du, dv = u - true_uv[0], v - true_uv[1]
+        b = (max(0.0, box[0] + du), max(0.0, box[1] + dv), min(cam.width - 1.0, box[2] + du),
+             min(cam.height - 1.0, box[3] + dv))
+        out.append((u, v, b) if b[2] > b[0] and b[3] > b[1] else (u, v))
+    return out
+
+
 def write_scene(sink, rig: Rig, states: np.ndarray, dets, var_px2: float, progress: bool = True,
                 frame_order_seed: int = 0) -> None:
     dt_us = int(round(1e6 / rig.frame_rate))
@@ -54,7 +70,7 @@ def write_scene(sink, rig: Rig, states: np.ndarray, dets, var_px2: float, progre
         sink.write(utime, "GROUND_TRUTH", ground_truth(utime, f, [1], states[f, :3][None]))
         for k in rng.permutation(len(rig.cameras)):  # cameras arrive in any order
             cam = rig.cameras[k]
-            msg = camera_frame(utime, f, cam, [(u, v) for (u, v, _) in dets[f][k]], sd)
+            msg = camera_frame(utime, f, cam, _with_boxes(cam, states[f, :3], dets[f][k]), sd)
             sink.write(utime, f"DETECTIONS_{cam.name}", msg)
 
 

@@ -1,0 +1,207 @@
+/*
+ * mvt_body.c - one model of a person: a frame's steps in order (mvt_body.h), and the body's
+ * geometry that they share (silhouette, feet).
+ */
+#include "mvt_body.h"
+
+#include <math.h>
+#include <string.h>
+
+mvt_real mvt_body_logit(mvt_real p)
+{
+    return MVT_LOG(p / (MVT_R(1.0) - p));
+}
+
+mvt_real mvt_body_prob(mvt_real lo)
+{
+    return MVT_R(1.0) / (MVT_R(1.0) + MVT_EXP(-lo));
+}
+
+int mvt_body_silhouette(const mvt_tracker_t *self, const mvt_camera_t *cam, const mvt_real x[3], mvt_real box[4],
+                        mvt_real head[2])
+{
+    if (mvt_cam_project(cam, x, head, NULL) != MVT_OK) {
+        return 0;
+    }
+    /* the body's half width across the line of sight, horizontally */
+    mvt_real side[2] = {-(x[1] - cam->centre[1]), x[0] - cam->centre[0]};
+    const mvt_real n = MVT_SQRT(side[0] * side[0] + side[1] * side[1]);
+    const mvt_real w = self->cfg.body_halfwidth_m;
+    if (n > MVT_R(1e-6)) {
+        side[0] *= w / n;
+        side[1] *= w / n;
+    } else {
+        side[0] = w;
+        side[1] = MVT_R(0.0);
+    }
+    box[0] = box[2] = head[0];
+    box[1] = box[3] = head[1];
+    for (int i = 0; i < 6; i++) {
+        const mvt_real s = (i % 3 == 0) ? MVT_R(0.0) : (i % 3 == 1 ? MVT_R(1.0) : MVT_R(-1.0));
+        const mvt_real p[3] = {x[0] + s * side[0], x[1] + s * side[1], i < 3 ? x[2] : MVT_R(0.0)};
+        mvt_real uv[2];
+        if (mvt_cam_project(cam, p, uv, NULL) != MVT_OK) {
+            continue; /* feet behind a camera that looks down steeply: the head's edges bound it */
+        }
+        box[0] = uv[0] < box[0] ? uv[0] : box[0];
+        box[1] = uv[1] < box[1] ? uv[1] : box[1];
+        box[2] = uv[0] > box[2] ? uv[0] : box[2];
+        box[3] = uv[1] > box[3] ? uv[1] : box[3];
+    }
+    return 1;
+}
+
+int mvt_body_below_head(const mvt_real box[4], mvt_real head_v, const mvt_real uv[2])
+{
+    return box[2] > box[0] && uv[0] >= box[0] && uv[0] <= box[2] && uv[1] <= box[3] &&
+           uv[1] >= head_v + MVT_BODY_FRAGMENT_BELOW * (box[3] - box[1]);
+}
+
+mvt_real mvt_body_clutter_density(const mvt_tracker_t *self, int k)
+{
+    const mvt_camera_t *cam = &self->cams[k];
+    return self->clutter_n[k] / ((mvt_real)cam->width * (mvt_real)cam->height);
+}
+
+static int boxes_overlap(const mvt_real a[4], const mvt_real b[4])
+{
+    return a[0] < b[2] && b[0] < a[2] && a[1] < b[3] && b[1] < a[3];
+}
+
+int mvt_body_feet(const mvt_tracker_t *self, int k, const mvt_detection_t *det, int self_t, mvt_real uv[2])
+{
+    const mvt_camera_t *cam = &self->cams[k];
+    const mvt_real *b = det->box;
+    if (!mvt_trk_box_ok(b) || b[0] < MVT_BODY_EDGE_PX || b[2] > (mvt_real)cam->width - MVT_R(1.0) - MVT_BODY_EDGE_PX ||
+        b[3] > (mvt_real)cam->height - MVT_R(1.0) - MVT_BODY_EDGE_PX) {
+        return 0;
+    }
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        const mvt_track_t *tr = &self->tracks[t];
+        const mvt_real *s = self->body.sil[k][t];
+        if (t == self_t || tr->id == 0 || !(tr->exist_lo > MVT_R(0.0)) || !(s[2] > s[0])) {
+            continue;
+        }
+        if (boxes_overlap(b, s)) {
+            return 0;
+        }
+    }
+    uv[0] = MVT_R(0.5) * (b[0] + b[2]);
+    uv[1] = b[3];
+    return 1;
+}
+
+mvt_err_t mvt_body_feet_innovation(const mvt_tracker_t *self, const mvt_cv_state_t *s, int k, const mvt_real uv[2],
+                                   mvt_pkf_innov_t *in)
+{
+    const mvt_camera_t *cam = &self->cams[k];
+    mvt_cv_state_t f = *s;
+    f.x[2] = MVT_R(0.0);
+    /* the blob's lowest point is the body's edge nearest the camera, on the floor */
+    const mvt_real to_cam[2] = {cam->centre[0] - s->x[0], cam->centre[1] - s->x[1]};
+    const mvt_real n = MVT_SQRT(to_cam[0] * to_cam[0] + to_cam[1] * to_cam[1]);
+    if (n > self->cfg.body_halfwidth_m) {
+        f.x[0] += self->cfg.body_halfwidth_m * to_cam[0] / n;
+        f.x[1] += self->cfg.body_halfwidth_m * to_cam[1] / n;
+    }
+    mvt_pkf_pred_t p;
+    mvt_err_t err = mvt_pkf_predict_obs(&f, cam, MVT_PKF_JACOBIAN, &p);
+    if (err != MVT_OK) {
+        return err;
+    }
+    /* the feet do not move with the head's height */
+    p.H[2] = MVT_R(0.0);
+    p.H[5] = MVT_R(0.0);
+    const mvt_real *P = s->P;
+    mvt_real hp[2][3];
+    for (int r = 0; r < 2; r++) {
+        for (int c = 0; c < 3; c++) {
+            hp[r][c] = p.H[r * 3 + 0] * P[0 * 6 + c] + p.H[r * 3 + 1] * P[1 * 6 + c];
+        }
+    }
+    p.hph[0] = hp[0][0] * p.H[0] + hp[0][1] * p.H[1];
+    p.hph[1] = hp[0][0] * p.H[3] + hp[0][1] * p.H[4];
+    p.hph[2] = hp[1][0] * p.H[3] + hp[1][1] * p.H[4];
+    const mvt_real spread_px = cam->fx * self->cfg.foot_sd_m / p.depth_m;
+    mvt_pkf_meas_t m;
+    err = mvt_pkf_meas_make(cam, uv, MVT_SQRT(cam->sigma_px * cam->sigma_px + spread_px * spread_px), &m);
+    if (err != MVT_OK) {
+        return err;
+    }
+    return mvt_pkf_innovation_from(&p, &m, NULL, in);
+}
+
+void mvt_body_existence(mvt_tracker_t *self, mvt_real dt)
+{
+    const mvt_tracker_config_t *c = &self->cfg;
+    if (!(dt > MVT_R(0.0))) {
+        return;
+    }
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        mvt_track_t *tr = &self->tracks[t];
+        if (tr->id == 0) {
+            continue;
+        }
+        const mvt_real *x = tr->s.x;
+        const int near_wall = x[0] < c->volume_min[0] + c->exit_margin_m || x[0] > c->volume_max[0] - c->exit_margin_m ||
+                              x[1] < c->volume_min[1] + c->exit_margin_m || x[1] > c->volume_max[1] - c->exit_margin_m;
+        const mvt_real hazard = MVT_R(1.0) / c->stay_s + (near_wall ? MVT_R(1.0) / c->exit_s : MVT_R(0.0));
+        const mvt_real ps = MVT_EXP(-dt * hazard);
+        /* r' = ps r: odds' = ps r / (1 - ps r) = ps / ((1 - ps) (1 + odds^-1) + ps odds^-1 ... ), written
+         * with 1 - r = 1 / (1 + e^lo) so that a track near certainty keeps its precision in float */
+        const mvt_real one_minus_r = MVT_R(1.0) / (MVT_R(1.0) + MVT_EXP(tr->exist_lo));
+        const mvt_real r = MVT_R(1.0) - one_minus_r;
+        const mvt_real den = (MVT_R(1.0) - ps) * r + one_minus_r;
+        tr->exist_lo = MVT_LOG(ps * r / den);
+    }
+}
+
+/* Learns camera k's clutter rate from this frame's unexplained blobs. */
+static void learn_clutter(mvt_tracker_t *self, int k, mvt_real dt)
+{
+    int n = 0;
+    for (int d = 0; d < self->num_meas[k]; d++) {
+        n += self->body.free_det[k][d];
+    }
+    const mvt_real a = dt > MVT_R(0.0) ? MVT_R(1.0) - MVT_EXP(-dt / MVT_BODY_CLUTTER_S) : MVT_R(0.0);
+    mvt_real c = self->clutter_n[k] + a * ((mvt_real)n - self->clutter_n[k]);
+    /* the prior never leaves the model: a camera that has shown no false blob for a while still may */
+    const mvt_real lo = MVT_R(0.1) * self->cfg.clutter_per_frame;
+    self->clutter_n[k] = c < lo ? lo : c;
+}
+
+void mvt_body_step(mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order, mvt_real dt)
+{
+    for (int k = 0; k < self->num_cameras; k++) {
+        if (!(self->clutter_n[k] > MVT_R(0.0))) {
+            self->clutter_n[k] = self->cfg.clutter_per_frame;
+        }
+        for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+            self->body.sil[k][t][0] = MVT_R(1.0);
+            self->body.sil[k][t][2] = MVT_R(0.0); /* not in the picture until the camera's pass */
+        }
+        memset(self->body.free_det[k], 0, sizeof(self->body.free_det[k]));
+    }
+    mvt_body_existence(self, dt);
+    for (int oi = 0; oi < n_order; oi++) {
+        const int k = order[oi];
+        const mvt_view_t *view = &frame->views[k];
+        for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+            if (self->tracks[t].id != 0) {
+                mvt_trk_predict_pos(self, &self->tracks[t], view->utime_us);
+            }
+        }
+        mvt_body_visibility(self, k);
+        mvt_body_explain(self, view, k);
+        mvt_body_update(self, view, k, dt);
+        learn_clutter(self, k, dt);
+    }
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        if (self->tracks[t].id != 0) {
+            mvt_trk_settle(self, &self->tracks[t]);
+            mvt_trk_predict(self, &self->tracks[t], frame->utime_us);
+        }
+    }
+    mvt_body_birth(self, frame, order, n_order, dt);
+    mvt_body_prune(self);
+}

@@ -1,0 +1,98 @@
+/*
+ * mvt_body.h - one model of a person (MVT_LIFECYCLE_BODY): the steps of a frame, one file each
+ * (internal to the core; docs/tracking.md, "One model of a person", gives the reasoning).
+ *
+ * A person is a head top at (x, y, z) over a body that stands on the floor, 2 body_halfwidth_m wide.
+ * Its silhouette in a camera is the box around the projections (lens included) of the head's and
+ * the feet's left and right edges. A blob that a camera reports is one of: the head of a person
+ * (its top is the head's top; a merged blob's top is the top-most head it holds), a fragment of a
+ * person's silhouette (its top lies inside a tracked body, below that body's head), or clutter.
+ * Each track carries the log odds that its person is in the volume; the cameras' evidence moves
+ * them as the integrated PDA does (Musicki, Evans and Stankovic, IEEE TAC 39(6), 1994), each camera
+ * with the detection probability of that head in that picture; confirmation and deletion are
+ * thresholds on them.
+ *
+ * One frame (mvt_body_step, in mvt_body.c; no step calls another, each reads what the previous
+ * wrote in the workspace mvt_body_ws_t and nothing older):
+ *   existence    survival over dt: a person leaves at rate 1 / stay_s, near a side wall at
+ *                1 / exit_s more
+ *   per observed camera, in capture-time order:
+ *     predict     each track's estimate to the camera's capture time (mvt_trk_motion.c)
+ *     visibility  mvt_body_vis.c: each track's predicted head and silhouette; the probability that
+ *                 the camera reports the head: p_detect inside the picture, less where the silhouette
+ *                 of a body likely present covers it (hidden, or merged under that body's top)
+ *     explain     mvt_body_explain.c: per camera, a global assignment of blobs to heads on the
+ *                 likelihood ratio of head against clutter; a blob left over whose top lies inside
+ *                 a tracked silhouette below its head is that body's fragment; the rest unexplained
+ *     update      mvt_body_update.c: a head updates its track (PKF), its blob's visible feet too; the
+ *                 existence takes the camera's evidence: detected, missed with a fragment of the
+ *                 body in view (no evidence), or missed; the camera's clutter rate is learnt
+ *   birth        mvt_body_birth.c: each unexplained blob is the seed of a candidate: its head ray
+ *                with the prior on head height, its feet where visible, then every other camera's
+ *                unexplained blobs (or their absence where the head would show); a candidate is
+ *                born when its odds of a person against clutter allow, best first
+ *   prune        mvt_body_prune.c: deletion by existence, uncertainty and the volume; two bodies
+ *                cannot overlap (closer than body_halfwidth_m, the estimates are one person's);
+ *                the status from the existence
+ */
+#ifndef MVT_BODY_H
+#define MVT_BODY_H
+
+#include "mvt_trk.h"
+
+/* A camera's clutter rate (false blobs per frame) is a running mean over this time, s. */
+#define MVT_BODY_CLUTTER_S MVT_R(10.0)
+/* The probability that a head inside another body's silhouette still shows as a blob top of its
+ * own (two tops of one blob the detector separates, a head above a shoulder line). */
+#define MVT_BODY_P_SHOWN_HIDDEN MVT_R(0.1)
+/* The probability that a blob's bottom, where nothing cuts it, is the person's feet (not a shadow,
+ * a blob merged with the floor's reflection, legs the colour of the floor). */
+#define MVT_BODY_P_FEET MVT_R(0.9)
+/* A blob's box within this many pixels of the picture's edge is cut by it. */
+#define MVT_BODY_EDGE_PX MVT_R(2.0)
+/* A fragment's top lies at least this share of the silhouette's height below the head's top (a
+ * blob at the head's own height beside it is not the body's). */
+#define MVT_BODY_FRAGMENT_BELOW MVT_R(0.08)
+
+/* Probability p in (0, 1) as log odds, and back. */
+mvt_real mvt_body_logit(mvt_real p);
+mvt_real mvt_body_prob(mvt_real lo);
+
+/* The silhouette of a body with head top x in camera cam: box (u0 v0 u1 v1, raw pixels) around the
+ * projections of the head's and feet's edges, and the head's own projection. 0 when the head is
+ * not in front of the camera (box and head unset). O(1): six projections. */
+int mvt_body_silhouette(const mvt_tracker_t *self, const mvt_camera_t *cam, const mvt_real x[3], mvt_real box[4],
+                        mvt_real head[2]);
+
+/* Image point uv lies inside silhouette box and at least MVT_BODY_FRAGMENT_BELOW of its height
+ * below its top (head_v: the head's row). */
+int mvt_body_below_head(const mvt_real box[4], mvt_real head_v, const mvt_real uv[2]);
+
+/* Camera k's clutter density: false blobs per frame over the picture's area, 1/px^2. */
+mvt_real mvt_body_clutter_density(const mvt_tracker_t *self, int k);
+
+/* The feet of blob det of camera k, when its bottom is visible: not within MVT_BODY_EDGE_PX of the
+ * picture's edge, and its box overlapping no silhouette (this camera's, ws.sil) of a body likely
+ * present other than track `self_t` (-1: none is the blob's own): a nearer or merged body would
+ * hide or be the bottom. uv receives the bottom's centre. 1 when visible. O(T). */
+int mvt_body_feet(const mvt_tracker_t *self, int k, const mvt_detection_t *det, int self_t, mvt_real uv[2]);
+
+/* The innovation of feet seen at uv (raw pixels) in camera k against state s: the blob's lowest
+ * point is the body's edge nearest the camera on the floor, (x, y, 0) moved body_halfwidth_m toward
+ * the camera, with the feet's spread (foot_sd_m at their depth) added to the
+ * pixel noise. MVT_ERR_* as mvt_pkf_innovation. */
+mvt_err_t mvt_body_feet_innovation(const mvt_tracker_t *self, const mvt_cv_state_t *s, int k, const mvt_real uv[2],
+                                   mvt_pkf_innov_t *in);
+
+/* The steps (see above). */
+void mvt_body_existence(mvt_tracker_t *self, mvt_real dt);
+void mvt_body_visibility(mvt_tracker_t *self, int k);
+void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k);
+void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_real dt);
+void mvt_body_birth(mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order, mvt_real dt);
+void mvt_body_prune(mvt_tracker_t *self);
+
+/* The whole frame (after mvt_tracker_step has prepared the measurements and the camera order). */
+void mvt_body_step(mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order, mvt_real dt);
+
+#endif /* MVT_BODY_H */

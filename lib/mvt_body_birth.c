@@ -1,0 +1,323 @@
+/*
+ * mvt_body_birth.c - new people from the blobs no track explains, from any number of views.
+ *
+ * Every unexplained blob (mvt_body_explain.c) seeds a candidate. Its head lies on the blob top's
+ * ray; before anything else is known, at the height of a standing adult's head (head_height_m,
+ * spread head_height_sd_m along the ray: the prior). The candidate is a small Kalman estimate that
+ * takes, in turn:
+ *   the seed's feet, where visible (mvt_body_feet): the point under the head on the floor;
+ *   every other observed camera: its unexplained blob nearest the candidate's predicted head inside
+ *   the chi-square gate, or, where the head would be in its picture and shows no such blob, the
+ *   miss.
+ * Its log odds of a new person against clutter start at ln(b / n): b the newcomers' heads this
+ * camera expects this frame (birth_per_s dt p_detect), n its clutter rate. Each step adds the
+ * evidence: the feet's row against a bottom anywhere below the top (MVT_BODY_P_FEET), a view's
+ * blob 1 - p + p N / lambda (N the density of the blob under the candidate, which before a second
+ * view is spread along the projected ray: the epipolar line's length counts against the
+ * coincidence), a miss 1 - p (p the view's detection probability, lowered where a tracked body
+ * covers the head). So a fragment (its feet say its top is no head's height), a false blob that
+ * the other views do not see, or two unrelated blobs that meet at some height, stay unborn, while
+ * a person seen by one camera alone is born from their first frames.
+ * Candidates are born best first while their existence is above exist_delete, each blob used once,
+ * never inside a body already there (two bodies cannot overlap: 2 body_halfwidth_m apart at least),
+ * and never from a blob that lies in a newborn's silhouette below its head (its fragment). A
+ * candidate that could be a tracked person whose existence has fallen under one half (within the
+ * gate of both estimates) is that person found again: their track restarts there with its label.
+ * Cost O(C D) candidates, each O(C D); memory: the workspace's candidate array.
+ */
+#include "mvt_body.h"
+
+#include <math.h>
+#include <string.h>
+
+static mvt_real dot3(const mvt_real a[3], const mvt_real b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+/* The seed's head on its ray, with the prior on head height. 0 when the ray does not meet the
+ * volume in front of the camera. */
+static int ray_prior(const mvt_tracker_t *self, int k, const mvt_real uv[2], mvt_real x[3], mvt_real P[9])
+{
+    const mvt_tracker_config_t *c = &self->cfg;
+    const mvt_camera_t *cam = &self->cams[k];
+    mvt_real o[3], dir[3];
+    if (mvt_cam_ray(cam, uv, o, dir) != MVT_OK) {
+        return 0;
+    }
+    mvt_real half_diag = MVT_R(0.0), centre[3];
+    for (int i = 0; i < 3; i++) {
+        const mvt_real e = c->volume_max[i] - c->volume_min[i];
+        half_diag += e * e;
+        centre[i] = MVT_R(0.5) * (c->volume_max[i] + c->volume_min[i]);
+    }
+    half_diag = MVT_R(0.5) * MVT_SQRT(half_diag);
+    mvt_real lam = MVT_R(-1.0), sd_par = half_diag;
+    if (MVT_FABS(dir[2]) > MVT_R(1e-3)) {
+        lam = (c->head_height_m - o[2]) / dir[2];
+        sd_par = c->head_height_sd_m / MVT_FABS(dir[2]);
+    }
+    if (!(lam > MVT_R(0.3)) || !(sd_par < half_diag)) {
+        /* the ray does not reach head height in front of the camera, or runs nearly level with it:
+         * anywhere along it within the volume */
+        const mvt_real oc[3] = {centre[0] - o[0], centre[1] - o[1], centre[2] - o[2]};
+        lam = dot3(oc, dir);
+        sd_par = half_diag;
+        if (!(lam > MVT_R(0.3))) {
+            return 0;
+        }
+    }
+    mvt_real sd_perp = lam * cam->sigma_px / cam->fx;
+    sd_perp = sd_perp > MVT_R(0.01) ? sd_perp : MVT_R(0.01);
+    const mvt_real a = sd_perp * sd_perp, b = sd_par * sd_par - a;
+    for (int i = 0; i < 3; i++) {
+        x[i] = o[i] + lam * dir[i];
+        for (int j = 0; j < 3; j++) {
+            P[i * 3 + j] = (i == j ? a : MVT_R(0.0)) + b * dir[i] * dir[j];
+        }
+    }
+    return 1;
+}
+
+/* Camera j's detection probability of a head at uv: p_detect, lowered by every tracked body likely
+ * present whose silhouette covers it (mvt_body_vis.c's model). */
+static mvt_real detect_prob(const mvt_tracker_t *self, int j, const mvt_real uv[2])
+{
+    const mvt_camera_t *cam = &self->cams[j];
+    if (!(uv[0] >= MVT_R(0.0) && uv[1] >= MVT_R(0.0) && uv[0] <= (mvt_real)cam->width - MVT_R(1.0) &&
+          uv[1] <= (mvt_real)cam->height - MVT_R(1.0))) {
+        return MVT_R(0.0);
+    }
+    mvt_real p = self->cfg.p_detect;
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        const mvt_real *s = self->body.sil[j][t];
+        const mvt_real r = mvt_body_prob(self->tracks[t].exist_lo);
+        if (self->tracks[t].id != 0 && r > MVT_R(0.5) && s[2] > s[0] && uv[0] >= s[0] && uv[0] <= s[2] &&
+            uv[1] >= s[1] && uv[1] <= s[3]) {
+            p *= MVT_R(1.0) - r * (MVT_R(1.0) - MVT_BODY_P_SHOWN_HIDDEN);
+        }
+    }
+    return p;
+}
+
+/* The candidate seeded by blob d of camera k. 1 when it lies in the volume. */
+static int seed_candidate(mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order, int k, int d,
+                          mvt_real dt, mvt_body_cand_t *cand)
+{
+    const mvt_tracker_config_t *c = &self->cfg;
+    const mvt_detection_t *det = &frame->views[k].det[d];
+    const mvt_real uv[2] = {det->u, det->v};
+    mvt_real x0[3], P0[9];
+    if (!ray_prior(self, k, uv, x0, P0)) {
+        return 0;
+    }
+    mvt_cv_state_t s;
+    mvt_cv_init(&s, x0, P0, c->init_vel_std_ms * c->init_vel_std_ms, frame->utime_us);
+    /* newcomers' heads this camera expects this frame; on the first frame (dt 0) people may be
+     * anywhere already: one a camera */
+    const mvt_real b = dt > MVT_R(0.0) ? c->birth_per_s * dt * c->p_detect : c->p_detect;
+    cand->lo = MVT_LOG(b / self->clutter_n[k]);
+    for (int j = 0; j < MVT_MAX_CAMERAS; j++) {
+        cand->det[j] = -1;
+    }
+    cand->det[k] = (int16_t)d;
+    mvt_real fuv[2];
+    mvt_pkf_innov_t in;
+    if (mvt_body_feet(self, k, det, -1, fuv) && mvt_body_feet_innovation(self, &s, k, fuv, &in) == MVT_OK) {
+        const mvt_real span = (mvt_real)self->cams[k].height - det->v;
+        const mvt_real nv = MVT_EXP(MVT_R(-0.5) * in.y[1] * in.y[1] / in.S[2]) / MVT_SQRT(MVT_R(6.2831853) * in.S[2]);
+        cand->lo += MVT_LOG(MVT_BODY_P_FEET * nv * (span > MVT_R(1.0) ? span : MVT_R(1.0)) +
+                            (MVT_R(1.0) - MVT_BODY_P_FEET));
+        if (in.d2 <= c->gate_chi2 && mvt_pkf_update(&s, &in) == MVT_OK) {
+            /* the feet fixed the distance along the ray */
+        }
+    }
+    for (int oi = 0; oi < n_order; oi++) {
+        const int j = order[oi];
+        if (j == k) {
+            continue;
+        }
+        mvt_pkf_pred_t pred;
+        if (mvt_pkf_predict_obs(&s, &self->cams[j], MVT_PKF_JACOBIAN, &pred) != MVT_OK) {
+            continue;
+        }
+        const mvt_real p = detect_prob(self, j, pred.h);
+        if (!(p > MVT_R(0.0))) {
+            continue;
+        }
+        int best = -1;
+        mvt_pkf_innov_t best_in;
+        for (int e = 0; e < self->num_meas[j]; e++) {
+            if (!self->body.free_det[j][e] || mvt_pkf_innovation_from(&pred, &self->meas[j][e], NULL, &in) != MVT_OK ||
+                !(in.d2 <= c->gate_chi2)) {
+                continue;
+            }
+            if (best < 0 || in.d2 < best_in.d2) {
+                best = e;
+                best_in = in;
+            }
+        }
+        if (best < 0) {
+            cand->lo += MVT_LOG(MVT_R(1.0) - p);
+            continue;
+        }
+        const mvt_real lambda = mvt_body_clutter_density(self, j);
+        cand->lo += MVT_LOG(MVT_R(1.0) - p + p * mvt_trk_density(&best_in) / lambda);
+        if (mvt_pkf_update(&s, &best_in) == MVT_OK) {
+            cand->det[j] = (int16_t)best;
+        }
+    }
+    for (int i = 0; i < 3; i++) {
+        cand->x[i] = s.x[i];
+        for (int j = 0; j < 3; j++) {
+            cand->P[i * 3 + j] = s.P[i * 6 + j];
+        }
+    }
+    return mvt_trk_inside_volume(c, cand->x) && cand->x[2] > MVT_R(0.0);
+}
+
+/* Horizontal distance between two heads, squared. */
+static mvt_real dist2_xy(const mvt_real a[3], const mvt_real b[3])
+{
+    const mvt_real dx = a[0] - b[0], dy = a[1] - b[1];
+    return dx * dx + dy * dy;
+}
+
+/* 1 when the candidate may be born: its blobs unused, no body there, its seed no newborn's
+ * fragment. */
+static int admissible(const mvt_tracker_t *self, const mvt_frame_t *frame, const mvt_body_cand_t *cand, int k,
+                      uint8_t taken[MVT_MAX_CAMERAS][MVT_MAX_DETECTIONS], const int16_t born[], int n_born)
+{
+    for (int j = 0; j < self->num_cameras; j++) {
+        if (cand->det[j] >= 0 && taken[j][cand->det[j]]) {
+            return 0;
+        }
+    }
+    const mvt_real sep = MVT_R(2.0) * self->cfg.body_halfwidth_m;
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        const mvt_track_t *tr = &self->tracks[t];
+        if (tr->id != 0 && tr->exist_lo > MVT_R(0.0) && dist2_xy(tr->s.x, cand->x) < sep * sep) {
+            return 0;
+        }
+    }
+    const mvt_detection_t *det = &frame->views[k].det[cand->det[k]];
+    const mvt_real uv[2] = {det->u, det->v};
+    for (int i = 0; i < n_born; i++) {
+        mvt_real box[4], head[2];
+        if (mvt_body_silhouette(self, &self->cams[k], self->tracks[born[i]].s.x, box, head) &&
+            mvt_body_below_head(box, head[1], uv)) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
+/* A track whose person is less likely there than not (it keeps its label while its existence lasts)
+ * and whose estimate the candidate could be, within the 3-dof gate of both covariances: the
+ * candidate is that person found again, not a new one. The nearest, or -1. */
+static int heir_of(const mvt_tracker_t *self, const mvt_body_cand_t *cand)
+{
+    int best = -1;
+    mvt_real best_d2 = MVT_TRK_GATE3;
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        const mvt_track_t *tr = &self->tracks[t];
+        if (tr->id == 0 || tr->exist_lo > MVT_R(0.0)) {
+            continue;
+        }
+        const mvt_real P[9] = {tr->s.P[0], tr->s.P[1], tr->s.P[2], tr->s.P[6], tr->s.P[7],
+                               tr->s.P[8], tr->s.P[12], tr->s.P[13], tr->s.P[14]};
+        const mvt_real d2 = mvt_trk_mahalanobis3(tr->s.x, P, cand->x, cand->P, NULL);
+        if (d2 >= MVT_R(0.0) && d2 < best_d2) {
+            best = t;
+            best_d2 = d2;
+        }
+    }
+    return best;
+}
+
+void mvt_body_birth(mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order, mvt_real dt)
+{
+    mvt_body_ws_t *ws = &self->body;
+    ws->num_cand = 0;
+    int16_t seed_cam[MVT_MAX_BIRTH_CANDIDATES];
+    for (int oi = 0; oi < n_order; oi++) {
+        const int k = order[oi];
+        for (int d = 0; d < self->num_meas[k]; d++) {
+            if (!ws->free_det[k][d]) {
+                continue;
+            }
+            if (ws->num_cand >= MVT_MAX_BIRTH_CANDIDATES) {
+                self->counters.birth_candidates_dropped++;
+                continue;
+            }
+            if (seed_candidate(self, frame, order, n_order, k, d, dt, &ws->cand[ws->num_cand])) {
+                seed_cam[ws->num_cand] = (int16_t)k;
+                ws->num_cand++;
+            }
+        }
+    }
+    uint8_t taken[MVT_MAX_CAMERAS][MVT_MAX_DETECTIONS];
+    memset(taken, 0, sizeof(taken));
+    uint8_t done[MVT_MAX_BIRTH_CANDIDATES];
+    memset(done, 0, sizeof(done));
+    int16_t born[MVT_MAX_TARGETS];
+    int n_born = 0;
+    const mvt_real lo_min = mvt_body_logit(self->cfg.exist_delete);
+    for (;;) {
+        int best = -1;
+        for (int i = 0; i < ws->num_cand; i++) {
+            if (!done[i] && ws->cand[i].lo > lo_min && (best < 0 || ws->cand[i].lo > ws->cand[best].lo)) {
+                best = i;
+            }
+        }
+        if (best < 0) {
+            break;
+        }
+        done[best] = 1;
+        const mvt_body_cand_t *cand = &ws->cand[best];
+        if (!admissible(self, frame, cand, seed_cam[best], taken, born, n_born)) {
+            continue;
+        }
+        const int heir = heir_of(self, cand);
+        int slot = heir;
+        for (int t = 0; t < MVT_MAX_TARGETS && slot < 0; t++) {
+            slot = self->tracks[t].id == 0 ? t : -1;
+        }
+        if (slot < 0) {
+            self->counters.births_refused_full++;
+            break;
+        }
+        mvt_track_t *tr = &self->tracks[slot];
+        if (heir >= 0) {
+            /* the same person: label, status and colour stay, the estimate starts again */
+            const mvt_track_t old = *tr;
+            memset(tr, 0, sizeof(*tr));
+            mvt_trk_start(self, tr, cand->x, cand->P, frame->utime_us);
+            tr->id = old.id;
+            tr->status = old.status;
+            tr->app = old.app;
+            tr->exist_lo = cand->lo > old.exist_lo ? cand->lo : old.exist_lo;
+            self->counters.reacquired++;
+        } else {
+            memset(tr, 0, sizeof(*tr));
+            mvt_trk_start(self, tr, cand->x, cand->P, frame->utime_us);
+            tr->id = self->next_id;
+            self->next_id = self->next_id < INT32_MAX ? self->next_id + 1 : 1;
+            tr->status = MVT_TRACK_TENTATIVE;
+            tr->exist_lo = cand->lo;
+            mvt_trk_app_reset(&tr->app);
+            self->counters.births++;
+        }
+        tr->last_update_us = frame->utime_us;
+        for (int j = 0; j < self->num_cameras; j++) {
+            if (cand->det[j] >= 0) {
+                taken[j][cand->det[j]] = 1;
+                tr->cameras_used |= 1u << j;
+                if (self->chroma_ok[j][cand->det[j]]) {
+                    mvt_trk_app_update(&tr->app, self->chroma[j][cand->det[j]]);
+                }
+            }
+        }
+        born[n_born++] = (int16_t)slot;
+    }
+}

@@ -1,0 +1,108 @@
+/*
+ * mvt_body_explain.c - what each of camera k's blobs is: a track's head, a fragment of a tracked
+ * body, or unexplained (clutter, or a person nobody tracks yet).
+ *
+ * Heads: one global assignment per camera (mvt_assoc, rows the tracks in front of the camera,
+ * columns the blobs and one "missed" column per track). Track t exists and shows its head with
+ * probability r p, r its existence, p its detection probability here (mvt_body_vis.c); the head
+ * is then the blob at innovation y with density N(y; 0, S), while clutter lies anywhere in the
+ * picture with density lambda (mvt_body_clutter_density). Giving blob d to track t rather than
+ * leaving t missed and d clutter gains ln(r p N / lambda) - ln(1 - r p); the assignment maximises
+ * the sum of the gains inside the chi-square gate.
+ * Fragments: a blob left over whose top lies inside a tracked silhouette, below its head, is part
+ * of that body (a torso under a hole, legs, a head split from its shoulders): it is nobody's head
+ * and no new person. Among several such bodies the likeliest present takes it.
+ * Cost O(T D) gating + O(T^2 (T + D)) assignment; memory: the tracker's workspaces.
+ */
+#include "mvt_body.h"
+
+#include <math.h>
+#include <stddef.h>
+
+/* Gains are offset by this constant to make the solver's costs non-negative (it forbids < 0). */
+#define GAIN_OFFSET MVT_R(1000.0)
+
+void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k)
+{
+    mvt_body_ws_t *ws = &self->body;
+    const int nd = self->num_meas[k];
+    const mvt_real lambda = mvt_body_clutter_density(self, k);
+    int16_t rows[MVT_MAX_TARGETS];
+    int nr = 0;
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        ws->assign[t] = -1;
+        ws->frag[t] = -1;
+        if (self->tracks[t].id != 0 && self->pred_ok[t]) {
+            rows[nr++] = (int16_t)t;
+        }
+    }
+    for (int d = 0; d < MVT_MAX_DETECTIONS; d++) {
+        ws->owner[d] = -1;
+    }
+    if (nr > 0 && nd > 0) {
+        const int nc = nd + nr;
+        mvt_real *cost = self->cl_cost;
+        int any = 0;
+        for (int i = 0; i < nr; i++) {
+            const int t = rows[i];
+            const mvt_real rp = mvt_body_prob(self->tracks[t].exist_lo) * ws->pd[t];
+            const mvt_real miss = MVT_LOG(MVT_R(1.0) - rp);
+            for (int c = 0; c < nc; c++) {
+                cost[i * nc + c] = MVT_R(-1.0);
+            }
+            cost[i * nc + nd + i] = GAIN_OFFSET;
+            for (int d = 0; d < nd; d++) {
+                mvt_pkf_innov_t in;
+                if (!self->meas_ok[k][d] || !(rp > MVT_R(0.0)) ||
+                    mvt_pkf_innovation_from(&self->pred[t], &self->meas[k][d], NULL, &in) != MVT_OK ||
+                    !(in.d2 <= self->cfg.gate_chi2)) {
+                    continue;
+                }
+                const mvt_real dens = mvt_trk_density(&in);
+                if (!(dens > MVT_R(0.0))) {
+                    continue;
+                }
+                mvt_real gain = MVT_LOG(rp * dens / lambda) - miss;
+                if (!(gain > MVT_R(0.0))) {
+                    continue;
+                }
+                gain = gain < GAIN_OFFSET ? gain : GAIN_OFFSET;
+                cost[i * nc + d] = GAIN_OFFSET - gain;
+                any = 1;
+            }
+        }
+        int r2c[MVT_MAX_TARGETS];
+        if (any && mvt_assoc_solve(cost, nr, nc, nc, r2c, &self->assoc_ws) == MVT_OK) {
+            for (int i = 0; i < nr; i++) {
+                if (r2c[i] >= 0 && r2c[i] < nd) {
+                    ws->assign[rows[i]] = (int16_t)r2c[i];
+                    ws->owner[r2c[i]] = rows[i];
+                }
+            }
+        }
+    }
+    /* fragments among the blobs left over */
+    for (int d = 0; d < nd; d++) {
+        if (ws->owner[d] >= 0 || !self->meas_ok[k][d]) {
+            continue;
+        }
+        const mvt_real uv[2] = {view->det[d].u, view->det[d].v};
+        int best = -1;
+        for (int i = 0; i < nr; i++) {
+            const int t = rows[i];
+            if (mvt_body_below_head(ws->sil[k][t], ws->head[t][1], uv) &&
+                (best < 0 || self->tracks[t].exist_lo > self->tracks[best].exist_lo)) {
+                best = t;
+            }
+        }
+        if (best >= 0) {
+            ws->owner[d] = (int16_t)best;
+            if (ws->frag[best] < 0) {
+                ws->frag[best] = (int16_t)d;
+            }
+            self->counters.fragments++;
+        } else {
+            ws->free_det[k][d] = 1;
+        }
+    }
+}

@@ -1,0 +1,95 @@
+/*
+ * mvt_body_prune.c - the end of a frame: which tracks end, which are one person, and each track's
+ * status, all from the model.
+ *
+ * A track ends when its existence falls under exist_delete (the cameras say nobody is there, or
+ * its person walked out through a wall), when its horizontal position is spread wider than
+ * max_pos_std_m (nobody has seen it for long: it is nowhere in particular), or when it leaves the
+ * volume widened by volume_margin_m.
+ * Two heads closer than body_halfwidth_m horizontally are one person (two bodies cannot stand
+ * inside each other): one track goes on with the likelier estimate (the higher existence) and the
+ * identity the person was shown with (a confirmed track's, the older if both were).
+ * Status: confirmed from the frame the existence first reaches exist_confirm, for as long as it
+ * stays above one half (more likely there than not; coasting when no camera saw the head this
+ * frame); tentative otherwise: a track that drops under one half keeps its identity and is shown
+ * confirmed again when its evidence returns.
+ * Cost O(T^2); memory: none.
+ */
+#include "mvt_body.h"
+
+#include <string.h>
+
+static void end_track(mvt_tracker_t *self, mvt_track_t *tr, uint64_t *reason)
+{
+    (*reason)++;
+    self->counters.deletions++;
+    memset(tr, 0, sizeof(*tr));
+}
+
+static int shown(const mvt_track_t *tr)
+{
+    return tr->status == MVT_TRACK_CONFIRMED || tr->status == MVT_TRACK_COASTING;
+}
+
+void mvt_body_prune(mvt_tracker_t *self)
+{
+    const mvt_tracker_config_t *c = &self->cfg;
+    const mvt_real lo_delete = mvt_body_logit(c->exist_delete);
+    const mvt_real lo_confirm = mvt_body_logit(c->exist_confirm);
+    const mvt_real max_var = c->max_pos_std_m * c->max_pos_std_m;
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        mvt_track_t *tr = &self->tracks[t];
+        if (tr->id == 0) {
+            continue;
+        }
+        if (mvt_trk_repair(self, tr) != MVT_OK) {
+            self->counters.numeric_faults++;
+            end_track(self, tr, &self->counters.deleted_uncertain);
+        } else if (!(tr->exist_lo >= lo_delete)) {
+            end_track(self, tr, &self->counters.deleted_unlikely);
+        } else if (!(tr->s.P[0] <= max_var) || !(tr->s.P[7] <= max_var)) {
+            end_track(self, tr, &self->counters.deleted_uncertain);
+        } else if (!mvt_trk_inside_volume(c, tr->s.x)) {
+            end_track(self, tr, &self->counters.deleted_outside);
+        }
+    }
+    const mvt_real sep2 = c->body_halfwidth_m * c->body_halfwidth_m;
+    for (int a = 0; a < MVT_MAX_TARGETS; a++) {
+        for (int b = a + 1; b < MVT_MAX_TARGETS && self->tracks[a].id != 0; b++) {
+            mvt_track_t *ta = &self->tracks[a], *tb = &self->tracks[b];
+            if (tb->id == 0) {
+                continue;
+            }
+            const mvt_real dx = ta->s.x[0] - tb->s.x[0], dy = ta->s.x[1] - tb->s.x[1];
+            if (!(dx * dx + dy * dy < sep2)) {
+                continue;
+            }
+            /* one person: the identity shown (the older of two shown ones), the likelier estimate */
+            const mvt_track_t *named = shown(ta) && (!shown(tb) || ta->id < tb->id) ? ta
+                                       : shown(tb)                                 ? tb
+                                       : (ta->id < tb->id ? ta : tb);
+            mvt_track_t *keep = ta->exist_lo >= tb->exist_lo ? ta : tb;
+            mvt_track_t *drop = keep == ta ? tb : ta;
+            const int32_t id = named->id;
+            const int32_t status = shown(ta) || shown(tb) ? MVT_TRACK_CONFIRMED : MVT_TRACK_TENTATIVE;
+            keep->id = id;
+            keep->status = status;
+            keep->cameras_used |= drop->cameras_used;
+            end_track(self, drop, &self->counters.duplicates_deleted);
+        }
+    }
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        mvt_track_t *tr = &self->tracks[t];
+        if (tr->id == 0) {
+            continue;
+        }
+        if (tr->exist_lo >= lo_confirm || (shown(tr) && tr->exist_lo > MVT_R(0.0))) {
+            tr->status = tr->cameras_used != 0u ? MVT_TRACK_CONFIRMED : MVT_TRACK_COASTING;
+        } else {
+            tr->status = MVT_TRACK_TENTATIVE;
+        }
+        if (tr->cameras_used != 0u) {
+            tr->last_update_us = self->last_utime_us;
+        }
+    }
+}

@@ -1,0 +1,98 @@
+/*
+ * mvt_body_update.c - camera k's evidence into each track: its state and its existence.
+ *
+ * State: the head that explain gave the track updates it (the PKF in the configured linearisation,
+ * through the motion model). Where that blob's bottom is visible feet (mvt_body_feet: not cut by
+ * the picture, no other body's silhouette on it), the feet observe the point under the head on the
+ * floor, (x, y, 0): with the head's ray they fix the distance along it, which is what one view
+ * leaves open.
+ * Existence (the integrated PDA's recursion with this camera's detection probability p):
+ *   head detected with innovation density N     odds *= 1 - p + p N / lambda
+ *   head missed, a fragment of the body in view  odds unchanged (the body is there; its head's
+ *                                                blob is not, for reasons the model does not hold)
+ *   head missed                                   odds *= 1 - p
+ * Cost O(T) updates; memory: none beyond the tracker.
+ */
+#include "mvt_body.h"
+
+#include <math.h>
+#include <stddef.h>
+
+/* Camera k's visible feet of track t's blob d, as a measurement of the point under the head. */
+static void update_feet(mvt_tracker_t *self, mvt_track_t *tr, int t, int k, const mvt_detection_t *det)
+{
+    mvt_real uv[2];
+    mvt_pkf_innov_t in;
+    if (!mvt_body_feet(self, k, det, t, uv) || mvt_body_feet_innovation(self, &tr->s, k, uv, &in) != MVT_OK ||
+        !(in.d2 <= self->cfg.gate_chi2)) {
+        return;
+    }
+    mvt_err_t err;
+    if (self->cfg.motion.n == 1 && mvt_imm_model_is(&self->cfg.motion.model[0], MVT_MOTION_CV)) {
+        err = mvt_pkf_update(&tr->s, &in);
+    } else {
+        const mvt_real noise[4] = {in.r, MVT_R(0.0), MVT_R(0.0), in.r};
+        err = mvt_imm_update_pos(&tr->imm, &self->cfg.motion, 2, in.H, in.y, noise, &tr->s);
+    }
+    if (err == MVT_OK) {
+        self->counters.foot_updates++;
+    } else {
+        self->counters.numeric_faults++;
+    }
+}
+
+/* The blob's colour is the person's when no other body's silhouette overlaps its box. */
+static int alone_in_blob(const mvt_tracker_t *self, int k, int t, const mvt_real box[4])
+{
+    for (int j = 0; j < MVT_MAX_TARGETS; j++) {
+        const mvt_real *s = self->body.sil[k][j];
+        if (j != t && self->tracks[j].id != 0 && s[2] > s[0] && box[0] < s[2] && s[0] < box[2] && box[1] < s[3] &&
+            s[1] < box[3]) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
+void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_real dt)
+{
+    (void)dt;
+    const mvt_body_ws_t *ws = &self->body;
+    const mvt_real lambda = mvt_body_clutter_density(self, k);
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        mvt_track_t *tr = &self->tracks[t];
+        if (tr->id == 0) {
+            continue;
+        }
+        const mvt_real p = ws->pd[t];
+        const int d = ws->assign[t];
+        if (d < 0) {
+            if (ws->frag[t] < 0) {
+                tr->exist_lo += MVT_LOG(MVT_R(1.0) - p);
+            }
+            continue;
+        }
+        mvt_pkf_innov_t in;
+        mvt_err_t err = mvt_pkf_innovation_from(&self->pred[t], &self->meas[k][d], NULL, &in);
+        if (err == MVT_OK) {
+            tr->exist_lo += MVT_LOG(MVT_R(1.0) - p + p * mvt_trk_density(&in) / lambda);
+            err = mvt_trk_update_pkf(self, tr, k, &in, NULL);
+        }
+        if (err != MVT_OK) {
+            self->counters.numeric_faults++;
+            continue;
+        }
+        tr->cameras_used |= 1u << k;
+        if (tr->view[k].p < MVT_R(0.5)) {
+            tr->cameras_placed |= 1u << k;
+        }
+        self->counters.updates++;
+        const mvt_detection_t *det = &view->det[d];
+        if (tr->view[k].p < MVT_R(0.5)) { /* the blob is the person's, not a displaced one */
+            update_feet(self, tr, t, k, det);
+        }
+        if (self->chroma_ok[k][d] && mvt_trk_box_ok(det->box) && alone_in_blob(self, k, t, det->box)) {
+            mvt_trk_app_update(&tr->app, self->chroma[k][d]);
+        }
+    }
+}
