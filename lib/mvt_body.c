@@ -51,6 +51,68 @@ int mvt_body_silhouette(const mvt_tracker_t *self, const mvt_camera_t *cam, cons
     return 1;
 }
 
+int mvt_body_axis(const mvt_tracker_t *self, const mvt_camera_t *cam, const mvt_real x[3], mvt_real axis[5])
+{
+    const mvt_real foot[3] = {x[0], x[1], MVT_R(0.0)};
+    const mvt_real mid[3] = {x[0], x[1], MVT_R(0.5) * x[2]};
+    mvt_real fuv[2];
+    const mvt_real depth = mvt_cam_depth(cam, mid);
+    if (mvt_cam_project(cam, x, axis, NULL) != MVT_OK || !(depth > MVT_R(0.0))) {
+        return 0;
+    }
+    if (mvt_cam_project(cam, foot, fuv, NULL) != MVT_OK) {
+        fuv[0] = axis[0]; /* a camera looking down steeply past the feet: the head alone */
+        fuv[1] = axis[1];
+    }
+    axis[2] = fuv[0];
+    axis[3] = fuv[1];
+    axis[4] = cam->fx * self->cfg.body_halfwidth_m / depth;
+    return 1;
+}
+
+/* Squared distance from point p to the segment a-b. */
+static mvt_real point_seg_d2(const mvt_real p[2], const mvt_real a[2], const mvt_real b[2])
+{
+    const mvt_real ab[2] = {b[0] - a[0], b[1] - a[1]};
+    const mvt_real len2 = ab[0] * ab[0] + ab[1] * ab[1];
+    mvt_real s = len2 > MVT_R(0.0) ? ((p[0] - a[0]) * ab[0] + (p[1] - a[1]) * ab[1]) / len2 : MVT_R(0.0);
+    s = s < MVT_R(0.0) ? MVT_R(0.0) : (s > MVT_R(1.0) ? MVT_R(1.0) : s);
+    const mvt_real d[2] = {p[0] - a[0] - s * ab[0], p[1] - a[1] - s * ab[1]};
+    return d[0] * d[0] + d[1] * d[1];
+}
+
+static mvt_real cross2(const mvt_real o[2], const mvt_real a[2], const mvt_real b[2])
+{
+    return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
+}
+
+int mvt_body_touch(const mvt_real a[5], const mvt_real b[5])
+{
+    const mvt_real w = a[4] + b[4]; /* the mean width: half of each full width */
+    const mvt_real *a0 = a, *a1 = a + 2, *b0 = b, *b1 = b + 2;
+    /* crossing axes */
+    const mvt_real d1 = cross2(a0, a1, b0), d2 = cross2(a0, a1, b1), d3 = cross2(b0, b1, a0), d4 = cross2(b0, b1, a1);
+    if (((d1 > MVT_R(0.0) && d2 < MVT_R(0.0)) || (d1 < MVT_R(0.0) && d2 > MVT_R(0.0))) &&
+        ((d3 > MVT_R(0.0) && d4 < MVT_R(0.0)) || (d3 < MVT_R(0.0) && d4 > MVT_R(0.0)))) {
+        return 1;
+    }
+    mvt_real m = point_seg_d2(a0, b0, b1);
+    mvt_real e = point_seg_d2(a1, b0, b1);
+    m = e < m ? e : m;
+    e = point_seg_d2(b0, a0, a1);
+    m = e < m ? e : m;
+    e = point_seg_d2(b1, a0, a1);
+    m = e < m ? e : m;
+    return m < w * w;
+}
+
+int mvt_body_on_body_below_head(const mvt_real axis[5], const mvt_real uv[2])
+{
+    const mvt_real len = MVT_SQRT((axis[2] - axis[0]) * (axis[2] - axis[0]) + (axis[3] - axis[1]) * (axis[3] - axis[1]));
+    return uv[1] >= axis[1] + MVT_BODY_FRAGMENT_BELOW * len && uv[1] <= axis[3] + axis[4] &&
+           point_seg_d2(uv, axis, axis + 2) <= axis[4] * axis[4];
+}
+
 int mvt_body_below_head(const mvt_real box[4], mvt_real head_v, const mvt_real uv[2])
 {
     return box[2] > box[0] && uv[0] >= box[0] && uv[0] <= box[2] && uv[1] <= box[3] &&
@@ -179,6 +241,7 @@ void mvt_body_step(mvt_tracker_t *self, const mvt_frame_t *frame, const int orde
         for (int t = 0; t < MVT_MAX_TARGETS; t++) {
             self->body.sil[k][t][0] = MVT_R(1.0);
             self->body.sil[k][t][2] = MVT_R(0.0); /* not in the picture until the camera's pass */
+            self->body.axis[k][t][4] = MVT_R(-1.0);
         }
         memset(self->body.free_det[k], 0, sizeof(self->body.free_det[k]));
     }

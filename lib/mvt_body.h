@@ -42,9 +42,16 @@
 
 /* A camera's clutter rate (false blobs per frame) is a running mean over this time, s. */
 #define MVT_BODY_CLUTTER_S MVT_R(10.0)
+/* A camera's detection probability (a visible head reported inside its gate) is a running mean
+ * over this time, s, of its likely-present tracks' hits, within MVT_BODY_PD_MIN..MVT_BODY_PD_MAX:
+ * misses come in runs (a bad segmentation, a burst of noise) that independent frames at the
+ * configured p_detect would take as proof of absence. */
+#define MVT_BODY_PD_S MVT_R(30.0)
+#define MVT_BODY_PD_MIN MVT_R(0.3)
+#define MVT_BODY_PD_MAX MVT_R(0.98)
 /* The probability that a head inside another body's silhouette still shows as a blob top of its
  * own (two tops of one blob the detector separates, a head above a shoulder line). */
-#define MVT_BODY_P_SHOWN_HIDDEN MVT_R(0.1)
+#define MVT_BODY_P_SHOWN_HIDDEN MVT_R(0.02)
 /* The probability that a blob's bottom, where nothing cuts it, is the person's feet (not a shadow,
  * a blob merged with the floor's reflection, legs the colour of the floor). */
 #define MVT_BODY_P_FEET MVT_R(0.9)
@@ -63,6 +70,18 @@ mvt_real mvt_body_prob(mvt_real lo);
  * not in front of the camera (box and head unset). O(1): six projections. */
 int mvt_body_silhouette(const mvt_tracker_t *self, const mvt_camera_t *cam, const mvt_real x[3], mvt_real box[4],
                         mvt_real head[2]);
+
+/* The silhouette as the body's axis in the picture, thickened: axis = head u v, the floor point
+ * under it u v, half the body's width at mid height (px), all raw pixels. 0 when the head is not in
+ * front of the camera. O(1). */
+int mvt_body_axis(const mvt_tracker_t *self, const mvt_camera_t *cam, const mvt_real x[3], mvt_real axis[5]);
+
+/* Two silhouettes touch in the picture (one blob): their axes come closer than their mean width. */
+int mvt_body_touch(const mvt_real a[5], const mvt_real b[5]);
+
+/* Image point uv lies on the silhouette (within its half width of the axis) and at least
+ * MVT_BODY_FRAGMENT_BELOW of the axis' length below the head: a fragment's top. */
+int mvt_body_on_body_below_head(const mvt_real axis[5], const mvt_real uv[2]);
 
 /* Image point uv lies inside silhouette box and at least MVT_BODY_FRAGMENT_BELOW of its height
  * below its top (head_v: the head's row). */
@@ -83,6 +102,13 @@ int mvt_body_feet(const mvt_tracker_t *self, int k, const mvt_detection_t *det, 
  * pixel noise. MVT_ERR_* as mvt_pkf_innovation. */
 mvt_err_t mvt_body_feet_innovation(const mvt_tracker_t *self, const mvt_cv_state_t *s, int k, const mvt_real uv[2],
                                    mvt_pkf_innov_t *in);
+
+/* The chance that camera k shows a head with silhouette axis (mvt_body_axis) as a blob top of its
+ * own, given the bodies tracked there (ws.axis of this camera; track self_t, or -1, excluded):
+ * every body more likely present than not whose silhouette touches this one and whose head is
+ * higher in the picture makes the blob's top its own (a nearer body hides the head, or the two
+ * merge into one blob), and lowers the chance to MVT_BODY_P_SHOWN_HIDDEN by its existence. O(T). */
+mvt_real mvt_body_shown(const mvt_tracker_t *self, int k, const mvt_real axis[5], int self_t);
 
 /* The steps (see above). */
 void mvt_body_existence(mvt_tracker_t *self, mvt_real dt);

@@ -79,25 +79,17 @@ static int ray_prior(const mvt_tracker_t *self, int k, const mvt_real uv[2], mvt
     return 1;
 }
 
-/* Camera j's detection probability of a head at uv: p_detect, lowered by every tracked body likely
- * present whose silhouette covers it (mvt_body_vis.c's model). */
-static mvt_real detect_prob(const mvt_tracker_t *self, int j, const mvt_real uv[2])
+/* Camera j's detection probability of a head at x (its predicted pixel uv): p_detect in the
+ * picture, lowered where tracked bodies hide it (mvt_body_shown). */
+static mvt_real detect_prob(const mvt_tracker_t *self, int j, const mvt_real x[3], const mvt_real uv[2])
 {
     const mvt_camera_t *cam = &self->cams[j];
+    mvt_real axis[5];
     if (!(uv[0] >= MVT_R(0.0) && uv[1] >= MVT_R(0.0) && uv[0] <= (mvt_real)cam->width - MVT_R(1.0) &&
-          uv[1] <= (mvt_real)cam->height - MVT_R(1.0))) {
+          uv[1] <= (mvt_real)cam->height - MVT_R(1.0)) || !mvt_body_axis(self, cam, x, axis)) {
         return MVT_R(0.0);
     }
-    mvt_real p = self->cfg.p_detect;
-    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
-        const mvt_real *s = self->body.sil[j][t];
-        const mvt_real r = mvt_body_prob(self->tracks[t].exist_lo);
-        if (self->tracks[t].id != 0 && r > MVT_R(0.5) && s[2] > s[0] && uv[0] >= s[0] && uv[0] <= s[2] &&
-            uv[1] >= s[1] && uv[1] <= s[3]) {
-            p *= MVT_R(1.0) - r * (MVT_R(1.0) - MVT_BODY_P_SHOWN_HIDDEN);
-        }
-    }
-    return p;
+    return self->p_detect_k[j] * mvt_body_shown(self, j, axis, -1);
 }
 
 /* The candidate seeded by blob d of camera k. 1 when it lies in the volume. */
@@ -141,7 +133,7 @@ static int seed_candidate(mvt_tracker_t *self, const mvt_frame_t *frame, const i
         if (mvt_pkf_predict_obs(&s, &self->cams[j], MVT_PKF_JACOBIAN, &pred) != MVT_OK) {
             continue;
         }
-        const mvt_real p = detect_prob(self, j, pred.h);
+        const mvt_real p = detect_prob(self, j, s.x, pred.h);
         if (!(p > MVT_R(0.0))) {
             continue;
         }
@@ -203,9 +195,8 @@ static int admissible(const mvt_tracker_t *self, const mvt_frame_t *frame, const
     const mvt_detection_t *det = &frame->views[k].det[cand->det[k]];
     const mvt_real uv[2] = {det->u, det->v};
     for (int i = 0; i < n_born; i++) {
-        mvt_real box[4], head[2];
-        if (mvt_body_silhouette(self, &self->cams[k], self->tracks[born[i]].s.x, box, head) &&
-            mvt_body_below_head(box, head[1], uv)) {
+        mvt_real axis[5];
+        if (mvt_body_axis(self, &self->cams[k], self->tracks[born[i]].s.x, axis) && mvt_body_on_body_below_head(axis, uv)) {
             return 0;
         }
     }

@@ -12,6 +12,8 @@
  * Fragments: a blob left over whose top lies inside a tracked silhouette, below its head, is part
  * of that body (a torso under a hole, legs, a head split from its shoulders): it is nobody's head
  * and no new person. Among several such bodies the likeliest present takes it.
+ * Merged blobs: a track left with neither whose predicted head lies in the box of a blob another
+ * head tops, under that top, may be inside that blob: the blob is its host.
  * Cost O(T D) gating + O(T^2 (T + D)) assignment; memory: the tracker's workspaces.
  */
 #include "mvt_body.h"
@@ -32,6 +34,7 @@ void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k)
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         ws->assign[t] = -1;
         ws->frag[t] = -1;
+        ws->host[t] = -1;
         if (self->tracks[t].id != 0 && self->pred_ok[t]) {
             rows[nr++] = (int16_t)t;
         }
@@ -90,7 +93,7 @@ void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k)
         int best = -1;
         for (int i = 0; i < nr; i++) {
             const int t = rows[i];
-            if (mvt_body_below_head(ws->sil[k][t], ws->head[t][1], uv) &&
+            if (mvt_body_on_body_below_head(ws->axis[k][t], uv) &&
                 (best < 0 || self->tracks[t].exist_lo > self->tracks[best].exist_lo)) {
                 best = t;
             }
@@ -103,6 +106,23 @@ void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k)
             self->counters.fragments++;
         } else {
             ws->free_det[k][d] = 1;
+        }
+    }
+    /* merged blobs: a track left without its head or a fragment whose predicted head lies in the
+     * box of a blob that the head of a body likely present tops, under that top, may be inside it */
+    for (int i = 0; i < nr; i++) {
+        const int t = rows[i];
+        if (ws->assign[t] >= 0 || ws->frag[t] >= 0 || !(self->tracks[t].exist_lo > MVT_R(0.0))) {
+            continue; /* a track not yet likely present earns its existence from its own blobs */
+        }
+        const mvt_real *h = ws->head[t];
+        for (int d = 0; d < nd && ws->host[t] < 0; d++) {
+            const int o = ws->owner[d];
+            const mvt_detection_t *det = &view->det[d];
+            if (o >= 0 && o != t && ws->assign[o] == d && self->tracks[o].exist_lo > MVT_R(0.0) && det->v <= h[1] &&
+                mvt_trk_in_box(det->box, h, MVT_R(0.0), MVT_R(0.0))) {
+                ws->host[t] = (int16_t)d;
+            }
         }
     }
 }

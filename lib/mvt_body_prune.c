@@ -7,8 +7,8 @@
  * max_pos_std_m (nobody has seen it for long: it is nowhere in particular), or when it leaves the
  * volume widened by volume_margin_m.
  * Two heads closer than body_halfwidth_m horizontally are one person (two bodies cannot stand
- * inside each other): one track goes on with the likelier estimate (the higher existence) and the
- * identity the person was shown with (a confirmed track's, the older if both were).
+ * inside each other): the track with the likelier estimate (the higher existence) goes on with its
+ * own identity, or with the other's when only the other was shown confirmed.
  * Status: confirmed from the frame the existence first reaches exist_confirm, for as long as it
  * stays above one half (more likely there than not; coasting when no camera saw the head this
  * frame); tentative otherwise: a track that drops under one half keeps its identity and is shown
@@ -64,11 +64,10 @@ void mvt_body_prune(mvt_tracker_t *self)
             if (!(dx * dx + dy * dy < sep2)) {
                 continue;
             }
-            /* one person: the identity shown (the older of two shown ones), the likelier estimate */
-            const mvt_track_t *named = shown(ta) && (!shown(tb) || ta->id < tb->id) ? ta
-                                       : shown(tb)                                 ? tb
-                                       : (ta->id < tb->id ? ta : tb);
+            /* one person: the likelier estimate, with its identity unless only the other's was shown */
             mvt_track_t *keep = ta->exist_lo >= tb->exist_lo ? ta : tb;
+            const mvt_track_t *other = keep == ta ? tb : ta;
+            const mvt_track_t *named = !shown(keep) && shown(other) ? other : keep;
             mvt_track_t *drop = keep == ta ? tb : ta;
             const int32_t id = named->id;
             const int32_t status = shown(ta) || shown(tb) ? MVT_TRACK_CONFIRMED : MVT_TRACK_TENTATIVE;

@@ -10,6 +10,8 @@
  *   head detected with innovation density N     odds *= 1 - p + p N / lambda
  *   head missed, a fragment of the body in view  odds unchanged (the body is there; its head's
  *                                                blob is not, for reasons the model does not hold)
+ *   head missed inside a merged blob (its host)   odds *= 1 - p MVT_BODY_P_SHOWN_HIDDEN, and the
+ *                                                head's column stays between the blob's sides
  *   head missed                                   odds *= 1 - p
  * Cost O(T) updates; memory: none beyond the tracker.
  */
@@ -54,9 +56,46 @@ static int alone_in_blob(const mvt_tracker_t *self, int k, int t, const mvt_real
     return 1;
 }
 
+/* Track t inside merged blob d of camera k: its head's column lies between the blob's sides
+ * (a truncation of the prediction's image column, mvt_cv_truncate). */
+static void keep_in_blob(mvt_tracker_t *self, mvt_track_t *tr, int k, const mvt_detection_t *det)
+{
+    mvt_pkf_pred_t p;
+    if (!mvt_trk_box_ok(det->box) || mvt_pkf_predict_obs(&tr->s, &self->cams[k], MVT_PKF_JACOBIAN, &p) != MVT_OK) {
+        return;
+    }
+    if (mvt_trk_truncate(self, tr, p.H, p.h[0], det->box[0], det->box[2]) != MVT_OK) {
+        self->counters.numeric_faults++;
+    } else {
+        self->counters.occluded_updates++;
+    }
+}
+
+/* Learns camera k's detection probability from this frame: each track likely present whose head
+ * the model expects to be shown (no body over it) is a trial, its head's blob a hit. */
+static void learn_detection(mvt_tracker_t *self, int k, mvt_real dt)
+{
+    const mvt_body_ws_t *ws = &self->body;
+    int n = 0, hits = 0;
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        if (self->tracks[t].id != 0 && self->tracks[t].exist_lo > MVT_R(0.0) &&
+            ws->pd[t] > MVT_R(0.5) * self->p_detect_k[k]) {
+            n++;
+            hits += ws->assign[t] >= 0;
+        }
+    }
+    if (n == 0 || !(dt > MVT_R(0.0))) {
+        return;
+    }
+    const mvt_real a = MVT_R(1.0) - MVT_EXP(-dt * (mvt_real)n / MVT_BODY_PD_S);
+    mvt_real p = self->p_detect_k[k] + a * ((mvt_real)hits / (mvt_real)n - self->p_detect_k[k]);
+    p = p < MVT_BODY_PD_MIN ? MVT_BODY_PD_MIN : (p > MVT_BODY_PD_MAX ? MVT_BODY_PD_MAX : p);
+    self->p_detect_k[k] = p;
+}
+
 void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_real dt)
 {
-    (void)dt;
+    learn_detection(self, k, dt);
     const mvt_body_ws_t *ws = &self->body;
     const mvt_real lambda = mvt_body_clutter_density(self, k);
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
@@ -67,7 +106,10 @@ void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_rea
         const mvt_real p = ws->pd[t];
         const int d = ws->assign[t];
         if (d < 0) {
-            if (ws->frag[t] < 0) {
+            if (ws->host[t] >= 0) {
+                tr->exist_lo += MVT_LOG(MVT_R(1.0) - p * MVT_BODY_P_SHOWN_HIDDEN);
+                keep_in_blob(self, tr, k, &view->det[ws->host[t]]);
+            } else if (ws->frag[t] < 0) {
                 tr->exist_lo += MVT_LOG(MVT_R(1.0) - p);
             }
             continue;

@@ -119,6 +119,7 @@ void mvt_tracker_save(const mvt_tracker_t *self, mvt_tracker_persist_t *out)
     out->birth_rate = self->birth_rate;
     out->birth_rate_us = self->birth_rate_us;
     memcpy(out->clutter_n, self->clutter_n, sizeof(out->clutter_n));
+    memcpy(out->p_detect_k, self->p_detect_k, sizeof(out->p_detect_k));
 }
 
 /* A lost identity (free, or kept for recovery): a place, a covariance with a non-negative
@@ -170,7 +171,8 @@ static int tracker_state_ok(const mvt_tracker_config_t *c, const mvt_tracker_per
         return 0;
     }
     for (int k = 0; k < MVT_MAX_CAMERAS; k++) {
-        if (!(p->clutter_n[k] >= MVT_R(0.0) && p->clutter_n[k] <= (mvt_real)MVT_MAX_DETECTIONS)) {
+        if (!(p->clutter_n[k] >= MVT_R(0.0) && p->clutter_n[k] <= (mvt_real)MVT_MAX_DETECTIONS) ||
+            !(p->p_detect_k[k] >= MVT_R(0.0) && p->p_detect_k[k] < MVT_R(1.0))) {
             return 0;
         }
     }
@@ -251,6 +253,7 @@ mvt_err_t mvt_tracker_resume(mvt_tracker_t *self, const mvt_tracker_persist_t *p
     self->birth_rate = p->birth_rate;
     self->birth_rate_us = p->birth_rate_us;
     memcpy(self->clutter_n, p->clutter_n, sizeof(self->clutter_n));
+    memcpy(self->p_detect_k, p->p_detect_k, sizeof(self->p_detect_k));
     return MVT_OK;
 }
 

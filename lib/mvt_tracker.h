@@ -142,7 +142,9 @@ typedef struct mvt_tracker_config {
                                    track seen in fewer than seen_min_views cameras this frame is kept
                                    this far from every track seen in more (mvt_cv_truncate along
                                    their horizontal separation); >= 0 (0: off), default 0.4 */
-    mvt_real p_detect;          /* probability that a camera whose picture holds a person's head
+    mvt_real p_detect;          /* MVT_LIFECYCLE_BODY: the prior of each camera's detection
+                                   probability, which it learns online (MVT_BODY_PD_S). Rules:
+                                   probability that a camera whose picture holds a person's head
                                    (not hidden) reports it: a detection within the birth radius,
                                    inside a blob's box; (0, 1), default 0.9. It weighs births and
                                    tracks (mvt_trk_evidence_weights): of a candidate, the two views
@@ -377,10 +379,15 @@ typedef struct mvt_body_ws {
     mvt_real sil[MVT_MAX_CAMERAS][MVT_MAX_TARGETS][4]; /* each track's predicted silhouette box in
                                                           each camera (u0 v0 u1 v1, raw px); u1 < u0:
                                                           not in that picture */
+    mvt_real axis[MVT_MAX_CAMERAS][MVT_MAX_TARGETS][5]; /* ... and its axis: head u v, the point
+                                                           under it on the floor u v, and half the
+                                                           body's width at mid height, raw px */
     mvt_real head[MVT_MAX_TARGETS][2];  /* this camera: predicted head, raw px */
     mvt_real pd[MVT_MAX_TARGETS];       /* this camera: probability that the head is reported */
     int16_t assign[MVT_MAX_TARGETS];    /* this camera: the detection that is the track's head, -1 */
     int16_t frag[MVT_MAX_TARGETS];      /* this camera: a detection that is a fragment of it, -1 */
+    int16_t host[MVT_MAX_TARGETS];      /* this camera: a merged blob that holds it under another
+                                           track's head, -1 */
     int16_t owner[MVT_MAX_DETECTIONS];  /* this camera: the track a detection belongs to, or -1 */
     uint8_t free_det[MVT_MAX_CAMERAS][MVT_MAX_DETECTIONS]; /* this frame: explained by no track */
     mvt_body_cand_t cand[MVT_MAX_BIRTH_CANDIDATES];
@@ -454,6 +461,8 @@ typedef struct mvt_tracker {
     int64_t birth_rate_us;      /* the frame it was last updated, 0: never */
     mvt_real clutter_n[MVT_MAX_CAMERAS]; /* MVT_LIFECYCLE_BODY: each camera's false blobs per
                                             frame, learnt (mvt_body.c) */
+    mvt_real p_detect_k[MVT_MAX_CAMERAS]; /* ... and its detection probability of a visible head,
+                                             learnt (mvt_body_update.c); 0: not yet */
     mvt_body_ws_t body;         /* MVT_LIFECYCLE_BODY's workspace */
 } mvt_tracker_t;
 
@@ -494,6 +503,7 @@ typedef struct mvt_tracker_persist {
     mvt_real birth_rate;
     int64_t birth_rate_us;
     mvt_real clutter_n[MVT_MAX_CAMERAS];
+    mvt_real p_detect_k[MVT_MAX_CAMERAS];
 } mvt_tracker_persist_t;
 
 /* Copies the persistent part of the tracker into out (padding zeroed: equal states give equal
