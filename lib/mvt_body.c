@@ -119,6 +119,16 @@ int mvt_body_below_head(const mvt_real box[4], mvt_real head_v, const mvt_real u
            uv[1] >= head_v + MVT_BODY_FRAGMENT_BELOW * (box[3] - box[1]);
 }
 
+mvt_real mvt_body_head_density(const mvt_tracker_t *self, const mvt_pkf_innov_t *in)
+{
+    const mvt_imm_config_t *m = &self->cfg.motion;
+    const mvt_real r = m->outlier_radius_px;
+    const mvt_real y2 = in->y[0] * in->y[0] + in->y[1] * in->y[1];
+    const mvt_real displaced = y2 <= r * r ? m->p_outlier / (MVT_R(3.14159265) * r * r) : MVT_R(0.0);
+    const mvt_real own = in->d2 <= self->cfg.gate_chi2 ? mvt_trk_density(in) : MVT_R(0.0);
+    return (MVT_R(1.0) - m->p_outlier) * own + displaced;
+}
+
 mvt_real mvt_body_clutter_density(const mvt_tracker_t *self, int k)
 {
     const mvt_camera_t *cam = &self->cams[k];
@@ -201,7 +211,7 @@ void mvt_body_existence(mvt_tracker_t *self, mvt_real dt)
     }
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         mvt_track_t *tr = &self->tracks[t];
-        if (tr->id == 0) {
+        if (tr->id == 0 || tr->dormant) {
             continue;
         }
         const mvt_real *x = tr->s.x;
@@ -244,6 +254,9 @@ void mvt_body_step(mvt_tracker_t *self, const mvt_frame_t *frame, const int orde
             self->body.axis[k][t][4] = MVT_R(-1.0);
         }
         memset(self->body.free_det[k], 0, sizeof(self->body.free_det[k]));
+        for (int d = 0; d < MVT_MAX_DETECTIONS; d++) {
+            self->body.head_of[k][d] = -1;
+        }
     }
     mvt_body_existence(self, dt);
     for (int oi = 0; oi < n_order; oi++) {

@@ -42,6 +42,10 @@
 
 /* A camera's clutter rate (false blobs per frame) is a running mean over this time, s. */
 #define MVT_BODY_CLUTTER_S MVT_R(10.0)
+/* A shown track whose existence fell under exist_delete sleeps this long, s, before its label is
+ * given up: a person lost in a knot who walks out elsewhere, or hidden longer than the existence
+ * lasts, is found again under their own label (mvt_body_birth.c, heir_of). */
+#define MVT_BODY_DORMANT_S MVT_R(3.0)
 /* A camera's detection probability (a visible head reported inside its gate) is a running mean
  * over this time, s, of its likely-present tracks' hits, within MVT_BODY_PD_MIN..MVT_BODY_PD_MAX:
  * misses come in runs (a bad segmentation, a burst of noise) that independent frames at the
@@ -109,6 +113,11 @@ mvt_err_t mvt_body_feet_innovation(const mvt_tracker_t *self, const mvt_cv_state
  * higher in the picture makes the blob's top its own (a nearer body hides the head, or the two
  * merge into one blob), and lowers the chance to MVT_BODY_P_SHOWN_HIDDEN by its existence. O(T). */
 mvt_real mvt_body_shown(const mvt_tracker_t *self, int k, const mvt_real axis[5], int self_t);
+
+/* The density (1/px^2) of a head's detection at innovation in, as the motion model weighs it
+ * (mvt_imm.h): the person's, N(y; 0, S), with probability 1 - p_outlier, and displaced anywhere
+ * within outlier_radius_px with p_outlier. 0 beyond both the chi-square gate and that radius. */
+mvt_real mvt_body_head_density(const mvt_tracker_t *self, const mvt_pkf_innov_t *in);
 
 /* The steps (see above). */
 void mvt_body_existence(mvt_tracker_t *self, mvt_real dt);

@@ -29,6 +29,9 @@
 
 #include <math.h>
 #include <string.h>
+#ifdef MVT_BODY_DEBUG
+#include <stdio.h>
+#endif
 
 static mvt_real dot3(const mvt_real a[3], const mvt_real b[3])
 {
@@ -79,15 +82,26 @@ static int ray_prior(const mvt_tracker_t *self, int k, const mvt_real uv[2], mvt
     return 1;
 }
 
-/* Camera j's detection probability of a head at x (its predicted pixel uv): p_detect in the
- * picture, lowered where tracked bodies hide it (mvt_body_shown). */
-static mvt_real detect_prob(const mvt_tracker_t *self, int j, const mvt_real x[3], const mvt_real uv[2])
+/* Camera j's detection probability of a head at x (its predicted pixel uv): its p in the picture,
+ * lowered where tracked bodies hide it (mvt_body_shown) or a blob that a tracked head tops may hold
+ * it (as a host holds a track, mvt_body_explain.c). */
+static mvt_real detect_prob(const mvt_tracker_t *self, const mvt_frame_t *frame, int j, const mvt_real x[3],
+                            const mvt_real uv[2])
 {
     const mvt_camera_t *cam = &self->cams[j];
     mvt_real axis[5];
     if (!(uv[0] >= MVT_R(0.0) && uv[1] >= MVT_R(0.0) && uv[0] <= (mvt_real)cam->width - MVT_R(1.0) &&
           uv[1] <= (mvt_real)cam->height - MVT_R(1.0)) || !mvt_body_axis(self, cam, x, axis)) {
         return MVT_R(0.0);
+    }
+    /* inside a blob that a tracked head tops, below that top: that blob may hold it (a host) */
+    for (int d = 0; d < self->num_meas[j]; d++) {
+        const int t = self->body.head_of[j][d];
+        const mvt_detection_t *det = &frame->views[j].det[d];
+        if (t >= 0 && self->tracks[t].exist_lo > MVT_R(0.0) && det->v <= uv[1] &&
+            mvt_trk_in_box(det->box, uv, MVT_R(0.0), MVT_R(0.0))) {
+            return self->p_detect_k[j] * MVT_BODY_P_SHOWN_HIDDEN;
+        }
     }
     return self->p_detect_k[j] * mvt_body_shown(self, j, axis, -1);
 }
@@ -133,7 +147,7 @@ static int seed_candidate(mvt_tracker_t *self, const mvt_frame_t *frame, const i
         if (mvt_pkf_predict_obs(&s, &self->cams[j], MVT_PKF_JACOBIAN, &pred) != MVT_OK) {
             continue;
         }
-        const mvt_real p = detect_prob(self, j, s.x, pred.h);
+        const mvt_real p = detect_prob(self, frame, j, s.x, pred.h);
         if (!(p > MVT_R(0.0))) {
             continue;
         }
@@ -150,6 +164,9 @@ static int seed_candidate(mvt_tracker_t *self, const mvt_frame_t *frame, const i
             }
         }
         if (best < 0) {
+#ifdef MVT_BODY_DEBUG
+            fprintf(stderr, "  MISS k%d p %.2f uv %.0f %.0f\n", j, (double)p, (double)pred.h[0], (double)pred.h[1]);
+#endif
             cand->lo += MVT_LOG(MVT_R(1.0) - p);
             continue;
         }
@@ -165,6 +182,9 @@ static int seed_candidate(mvt_tracker_t *self, const mvt_frame_t *frame, const i
             cand->P[i * 3 + j] = s.P[i * 6 + j];
         }
     }
+#ifdef MVT_BODY_DEBUG
+    fprintf(stderr, "SEED %lld k%d d%d lo %.2f x %.2f %.2f %.2f in %d\n", (long long)frame->utime_us, k, d, (double)cand->lo, (double)cand->x[0], (double)cand->x[1], (double)cand->x[2], mvt_trk_inside_volume(c, cand->x));
+#endif
     return mvt_trk_inside_volume(c, cand->x) && cand->x[2] > MVT_R(0.0);
 }
 
@@ -203,8 +223,8 @@ static int admissible(const mvt_tracker_t *self, const mvt_frame_t *frame, const
     return 1;
 }
 
-/* A track whose person is less likely there than not (it keeps its label while its existence lasts)
- * and whose estimate the candidate could be, within the 3-dof gate of both covariances: the
+/* A track whose person is less likely there than not (it keeps its label while its existence lasts),
+ * or a dormant one (mvt_body_prune.c), and whose estimate the candidate could be, within the 3-dof gate of both covariances: the
  * candidate is that person found again, not a new one. The nearest, or -1. */
 static int heir_of(const mvt_tracker_t *self, const mvt_body_cand_t *cand)
 {
@@ -212,12 +232,24 @@ static int heir_of(const mvt_tracker_t *self, const mvt_body_cand_t *cand)
     mvt_real best_d2 = MVT_TRK_GATE3;
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         const mvt_track_t *tr = &self->tracks[t];
-        if (tr->id == 0 || tr->exist_lo > MVT_R(0.0)) {
+        if (tr->id == 0 || (tr->exist_lo > MVT_R(0.0) && !tr->dormant)) {
             continue;
         }
-        const mvt_real P[9] = {tr->s.P[0], tr->s.P[1], tr->s.P[2], tr->s.P[6], tr->s.P[7],
-                               tr->s.P[8], tr->s.P[12], tr->s.P[13], tr->s.P[14]};
+        mvt_real P[9] = {tr->s.P[0], tr->s.P[1], tr->s.P[2], tr->s.P[6], tr->s.P[7],
+                         tr->s.P[8], tr->s.P[12], tr->s.P[13], tr->s.P[14]};
+        if (tr->dormant) {
+            /* asleep, nobody saw where the person walked: walking pace's reach over that time (at
+             * least half a second's, the time it takes to fall asleep) */
+            mvt_real since = mvt_us_to_s(self->last_utime_us - tr->last_update_us);
+            since = since > MVT_R(0.5) ? since : MVT_R(0.5);
+            const mvt_real reach = self->cfg.init_vel_std_ms * since;
+            P[0] += reach * reach;
+            P[4] += reach * reach;
+        }
         const mvt_real d2 = mvt_trk_mahalanobis3(tr->s.x, P, cand->x, cand->P, NULL);
+#ifdef MVT_BODY_DEBUG
+        fprintf(stderr, "HEIR id%d dormant %d d2 %.1f x %.2f %.2f %.2f cand %.2f %.2f %.2f\n", tr->id, tr->dormant, (double)d2, (double)tr->s.x[0], (double)tr->s.x[1], (double)tr->s.x[2], (double)cand->x[0], (double)cand->x[1], (double)cand->x[2]);
+#endif
         if (d2 >= MVT_R(0.0) && d2 < best_d2) {
             best = t;
             best_d2 = d2;
@@ -266,6 +298,11 @@ void mvt_body_birth(mvt_tracker_t *self, const mvt_frame_t *frame, const int ord
         }
         done[best] = 1;
         const mvt_body_cand_t *cand = &ws->cand[best];
+#ifdef MVT_BODY_DEBUG
+        fprintf(stderr, "CAND %lld seed k%d lo %.2f x %.2f %.2f %.2f dets", (long long)frame->utime_us, seed_cam[best], (double)cand->lo, (double)cand->x[0], (double)cand->x[1], (double)cand->x[2]);
+        for (int j = 0; j < self->num_cameras; j++) fprintf(stderr, " %d", cand->det[j]);
+        fprintf(stderr, " adm %d\n", admissible(self, frame, cand, seed_cam[best], taken, born, n_born));
+#endif
         if (!admissible(self, frame, cand, seed_cam[best], taken, born, n_born)) {
             continue;
         }
@@ -285,9 +322,10 @@ void mvt_body_birth(mvt_tracker_t *self, const mvt_frame_t *frame, const int ord
             memset(tr, 0, sizeof(*tr));
             mvt_trk_start(self, tr, cand->x, cand->P, frame->utime_us);
             tr->id = old.id;
-            tr->status = old.status;
+            tr->status = old.was_shown ? MVT_TRACK_CONFIRMED : old.status; /* shown before */
+            tr->was_shown = old.was_shown;
             tr->app = old.app;
-            tr->exist_lo = cand->lo > old.exist_lo ? cand->lo : old.exist_lo;
+            tr->exist_lo = old.dormant || cand->lo > old.exist_lo ? cand->lo : old.exist_lo;
             self->counters.reacquired++;
         } else {
             memset(tr, 0, sizeof(*tr));

@@ -5,10 +5,11 @@
  * Heads: one global assignment per camera (mvt_assoc, rows the tracks in front of the camera,
  * columns the blobs and one "missed" column per track). Track t exists and shows its head with
  * probability r p, r its existence, p its detection probability here (mvt_body_vis.c); the head
- * is then the blob at innovation y with density N(y; 0, S), while clutter lies anywhere in the
- * picture with density lambda (mvt_body_clutter_density). Giving blob d to track t rather than
- * leaving t missed and d clutter gains ln(r p N / lambda) - ln(1 - r p); the assignment maximises
- * the sum of the gains inside the chi-square gate.
+ * is then the blob at innovation y with the motion model's density (mvt_body_head_density: the
+ * person's N(y; 0, S) inside the chi-square gate, or displaced within outlier_radius_px), while
+ * clutter lies anywhere in the picture with density lambda (mvt_body_clutter_density). Giving blob
+ * d to track t rather than leaving t missed and d clutter gains ln(r p N / lambda) - ln(1 - r p);
+ * the assignment maximises the sum of the gains.
  * Fragments: a blob left over whose top lies inside a tracked silhouette, below its head, is part
  * of that body (a torso under a hole, legs, a head split from its shoulders): it is nobody's head
  * and no new person. Among several such bodies the likeliest present takes it.
@@ -20,6 +21,9 @@
 
 #include <math.h>
 #include <stddef.h>
+#ifdef MVT_BODY_DEBUG
+#include <stdio.h>
+#endif
 
 /* Gains are offset by this constant to make the solver's costs non-negative (it forbids < 0). */
 #define GAIN_OFFSET MVT_R(1000.0)
@@ -41,6 +45,7 @@ void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k)
     }
     for (int d = 0; d < MVT_MAX_DETECTIONS; d++) {
         ws->owner[d] = -1;
+        ws->head_of[k][d] = -1;
     }
     if (nr > 0 && nd > 0) {
         const int nc = nd + nr;
@@ -56,12 +61,18 @@ void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k)
             cost[i * nc + nd + i] = GAIN_OFFSET;
             for (int d = 0; d < nd; d++) {
                 mvt_pkf_innov_t in;
+#ifdef MVT_BODY_DEBUG
+                { mvt_pkf_innov_t q; int e = mvt_pkf_innovation_from(&self->pred[t], &self->meas[k][d], NULL, &q);
+                  fprintf(stderr, "TRY %lld k%d id%d d%d ok%d e%d d2 %.1f y %.1f %.1f S %.1f %.1f\n", (long long)view->utime_us, k, self->tracks[t].id, d, self->meas_ok[k][d], e, (double)q.d2, (double)q.y[0], (double)q.y[1], (double)q.S[0], (double)q.S[2]); }
+#endif
                 if (!self->meas_ok[k][d] || !(rp > MVT_R(0.0)) ||
-                    mvt_pkf_innovation_from(&self->pred[t], &self->meas[k][d], NULL, &in) != MVT_OK ||
-                    !(in.d2 <= self->cfg.gate_chi2)) {
+                    mvt_pkf_innovation_from(&self->pred[t], &self->meas[k][d], NULL, &in) != MVT_OK) {
                     continue;
                 }
-                const mvt_real dens = mvt_trk_density(&in);
+                const mvt_real dens = mvt_body_head_density(self, &in);
+#ifdef MVT_BODY_DEBUG
+                fprintf(stderr, "GATE %lld k%d id%d d%d d2 %.1f y %.1f %.1f S %.1f %.1f rp %.2f\n", (long long)view->utime_us, k, self->tracks[t].id, d, (double)in.d2, (double)in.y[0], (double)in.y[1], (double)in.S[0], (double)in.S[2], (double)rp);
+#endif
                 if (!(dens > MVT_R(0.0))) {
                     continue;
                 }
@@ -80,6 +91,7 @@ void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k)
                 if (r2c[i] >= 0 && r2c[i] < nd) {
                     ws->assign[rows[i]] = (int16_t)r2c[i];
                     ws->owner[r2c[i]] = rows[i];
+                    ws->head_of[k][r2c[i]] = rows[i];
                 }
             }
         }
@@ -98,6 +110,9 @@ void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k)
                 best = t;
             }
         }
+#ifdef MVT_BODY_DEBUG
+        fprintf(stderr, "LEFT %lld k%d d%d uv %.0f %.0f frag_of %d\n", (long long)view->utime_us, k, d, (double)uv[0], (double)uv[1], best >= 0 ? self->tracks[best].id : -1);
+#endif
         if (best >= 0) {
             ws->owner[d] = (int16_t)best;
             if (ws->frag[best] < 0) {

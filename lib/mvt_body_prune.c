@@ -3,9 +3,13 @@
  * status, all from the model.
  *
  * A track ends when its existence falls under exist_delete (the cameras say nobody is there, or
- * its person walked out through a wall), when its horizontal position is spread wider than
+ * its person walked out through a wall): one that was shown confirmed first sleeps (dormant, unseen
+ * and unshown) MVT_BODY_DORMANT_S, its label kept for the person found again nearby. It ends too
+ * when its horizontal position is spread wider than
  * max_pos_std_m (nobody has seen it for long: it is nowhere in particular), or when it leaves the
  * volume widened by volume_margin_m.
+ * Bodies do not overlap: a track no camera placed this frame is kept a body's width from those the
+ * cameras placed (a truncation along their horizontal separation).
  * Two heads closer than body_halfwidth_m horizontally are one person (two bodies cannot stand
  * inside each other): the track with the likelier estimate (the higher existence) goes on with its
  * own identity, or with the other's when only the other was shown confirmed.
@@ -17,6 +21,7 @@
  */
 #include "mvt_body.h"
 
+#include <math.h>
 #include <string.h>
 
 static void end_track(mvt_tracker_t *self, mvt_track_t *tr, uint64_t *reason)
@@ -45,19 +50,56 @@ void mvt_body_prune(mvt_tracker_t *self)
         if (mvt_trk_repair(self, tr) != MVT_OK) {
             self->counters.numeric_faults++;
             end_track(self, tr, &self->counters.deleted_uncertain);
+        } else if (tr->dormant) {
+            if (mvt_us_to_s(self->last_utime_us - tr->last_update_us) > MVT_BODY_DORMANT_S) {
+                end_track(self, tr, &self->counters.deleted_unlikely);
+            }
         } else if (!(tr->exist_lo >= lo_delete)) {
-            end_track(self, tr, &self->counters.deleted_unlikely);
+            if (tr->was_shown) {
+                tr->dormant = 1; /* the label waits for its person (heir_of, mvt_body_birth.c) */
+                tr->status = MVT_TRACK_TENTATIVE;
+                tr->last_update_us = self->last_utime_us; /* asleep since */
+            } else {
+                end_track(self, tr, &self->counters.deleted_unlikely);
+            }
         } else if (!(tr->s.P[0] <= max_var) || !(tr->s.P[7] <= max_var)) {
             end_track(self, tr, &self->counters.deleted_uncertain);
         } else if (!mvt_trk_inside_volume(c, tr->s.x)) {
             end_track(self, tr, &self->counters.deleted_outside);
         }
     }
+    /* bodies do not overlap: a track no camera placed this frame (hidden, or missed) is kept a
+     * body's width (2 body_halfwidth_m, horizontally) from every track a camera placed; its height
+     * stays as it is (a ground-plane truncation of the prediction) */
+    const mvt_real width = MVT_R(2.0) * c->body_halfwidth_m;
+    for (int a = 0; a < MVT_MAX_TARGETS; a++) {
+        mvt_track_t *ta = &self->tracks[a];
+        if (ta->id == 0 || ta->cameras_used != 0u || ta->dormant) {
+            continue;
+        }
+        for (int b = 0; b < MVT_MAX_TARGETS; b++) {
+            const mvt_track_t *tb = &self->tracks[b];
+            if (b == a || tb->id == 0 || tb->cameras_used == 0u || !(tb->exist_lo > MVT_R(0.0)) || tb->dormant) {
+                continue;
+            }
+            const mvt_real dx = ta->s.x[0] - tb->s.x[0], dy = ta->s.x[1] - tb->s.x[1];
+            const mvt_real dist = MVT_SQRT(dx * dx + dy * dy);
+            if (!(dist < width) || !(dist > MVT_R(1e-6))) {
+                continue;
+            }
+            const mvt_real H[3] = {dx / dist, dy / dist, MVT_R(0.0)};
+            const mvt_real var_b = H[0] * H[0] * tb->s.P[0] + MVT_R(2.0) * H[0] * H[1] * tb->s.P[1] + H[1] * H[1] * tb->s.P[7];
+            const mvt_real base = H[0] * tb->s.x[0] + H[1] * tb->s.x[1];
+            if (mvt_trk_truncate_ground(self, ta, H, base + dist, var_b, base + width, base + MVT_R(1e3)) == MVT_OK) {
+                self->counters.exclusion_updates++;
+            }
+        }
+    }
     const mvt_real sep2 = c->body_halfwidth_m * c->body_halfwidth_m;
     for (int a = 0; a < MVT_MAX_TARGETS; a++) {
         for (int b = a + 1; b < MVT_MAX_TARGETS && self->tracks[a].id != 0; b++) {
             mvt_track_t *ta = &self->tracks[a], *tb = &self->tracks[b];
-            if (tb->id == 0) {
+            if (tb->id == 0 || ta->dormant || tb->dormant) {
                 continue;
             }
             const mvt_real dx = ta->s.x[0] - tb->s.x[0], dy = ta->s.x[1] - tb->s.x[1];
@@ -73,17 +115,19 @@ void mvt_body_prune(mvt_tracker_t *self)
             const int32_t status = shown(ta) || shown(tb) ? MVT_TRACK_CONFIRMED : MVT_TRACK_TENTATIVE;
             keep->id = id;
             keep->status = status;
+            keep->was_shown |= drop->was_shown;
             keep->cameras_used |= drop->cameras_used;
             end_track(self, drop, &self->counters.duplicates_deleted);
         }
     }
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         mvt_track_t *tr = &self->tracks[t];
-        if (tr->id == 0) {
+        if (tr->id == 0 || tr->dormant) {
             continue;
         }
         if (tr->exist_lo >= lo_confirm || (shown(tr) && tr->exist_lo > MVT_R(0.0))) {
             tr->status = tr->cameras_used != 0u ? MVT_TRACK_CONFIRMED : MVT_TRACK_COASTING;
+            tr->was_shown = 1;
         } else {
             tr->status = MVT_TRACK_TENTATIVE;
         }

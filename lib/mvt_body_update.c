@@ -2,12 +2,15 @@
  * mvt_body_update.c - camera k's evidence into each track: its state and its existence.
  *
  * State: the head that explain gave the track updates it (the PKF in the configured linearisation,
- * through the motion model). Where that blob's bottom is visible feet (mvt_body_feet: not cut by
+ * through the motion model) when it lies inside the chi-square gate; a displaced one (beyond the
+ * gate, within the motion model's outlier radius) is evidence that the person is there, not of
+ * where. Where that blob's bottom is visible feet (mvt_body_feet: not cut by
  * the picture, no other body's silhouette on it), the feet observe the point under the head on the
  * floor, (x, y, 0): with the head's ray they fix the distance along it, which is what one view
  * leaves open.
  * Existence (the integrated PDA's recursion with this camera's detection probability p):
- *   head detected with innovation density N     odds *= 1 - p + p N / lambda
+ *   head detected with density N (its own, or    odds *= 1 - p + p N / lambda
+ *   displaced: mvt_body_head_density)
  *   head missed, a fragment of the body in view  odds unchanged (the body is there; its head's
  *                                                blob is not, for reasons the model does not hold)
  *   head missed inside a merged blob (its host)   odds *= 1 - p MVT_BODY_P_SHOWN_HIDDEN, and the
@@ -19,6 +22,9 @@
 
 #include <math.h>
 #include <stddef.h>
+#ifdef MVT_BODY_DEBUG
+#include <stdio.h>
+#endif
 
 /* Camera k's visible feet of track t's blob d, as a measurement of the point under the head. */
 static void update_feet(mvt_tracker_t *self, mvt_track_t *tr, int t, int k, const mvt_detection_t *det)
@@ -100,11 +106,15 @@ void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_rea
     const mvt_real lambda = mvt_body_clutter_density(self, k);
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         mvt_track_t *tr = &self->tracks[t];
-        if (tr->id == 0) {
+        if (tr->id == 0 || tr->dormant) {
             continue;
         }
         const mvt_real p = ws->pd[t];
         const int d = ws->assign[t];
+#ifdef MVT_BODY_DEBUG
+        fprintf(stderr, "DBG %lld k%d id%d lo %.2f pd %.2f a%d f%d h%d x %.2f %.2f %.2f pdk %.2f clut %.3f\n", (long long)view->utime_us, k, tr->id,
+                (double)tr->exist_lo, (double)p, d, ws->frag[t], ws->host[t], (double)tr->s.x[0], (double)tr->s.x[1], (double)tr->s.x[2], (double)self->p_detect_k[k], (double)self->clutter_n[k]);
+#endif
         if (d < 0) {
             if (ws->host[t] >= 0) {
                 tr->exist_lo += MVT_LOG(MVT_R(1.0) - p * MVT_BODY_P_SHOWN_HIDDEN);
@@ -117,7 +127,11 @@ void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_rea
         mvt_pkf_innov_t in;
         mvt_err_t err = mvt_pkf_innovation_from(&self->pred[t], &self->meas[k][d], NULL, &in);
         if (err == MVT_OK) {
-            tr->exist_lo += MVT_LOG(MVT_R(1.0) - p + p * mvt_trk_density(&in) / lambda);
+            tr->exist_lo += MVT_LOG(MVT_R(1.0) - p + p * mvt_body_head_density(self, &in) / lambda);
+            if (!(in.d2 <= self->cfg.gate_chi2)) {
+                self->counters.gated_out++; /* displaced: evidence of the person, not of where */
+                continue;
+            }
             err = mvt_trk_update_pkf(self, tr, k, &in, NULL);
         }
         if (err != MVT_OK) {

@@ -43,7 +43,7 @@ void mvt_body_visibility(mvt_tracker_t *self, int k)
         sil[0] = MVT_R(1.0);
         sil[2] = MVT_R(0.0);
         axis[4] = MVT_R(-1.0);
-        if (tr->id == 0) {
+        if (tr->id == 0 || tr->dormant) {
             continue;
         }
         if (mvt_pkf_predict_obs(&tr->s, cam, self->cfg.lin, &self->pred[t]) != MVT_OK) {

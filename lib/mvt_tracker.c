@@ -304,7 +304,7 @@ void mvt_tracker_output(const mvt_tracker_t *self, int64_t utime_us, mvt_output_
     out->num_tracks = 0;
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         const mvt_track_t *tr = &self->tracks[t];
-        if (tr->id == 0) {
+        if (tr->id == 0 || tr->dormant) {
             continue;
         }
         mvt_track_out_t *o = &out->tracks[out->num_tracks++];

@@ -355,6 +355,10 @@ typedef struct mvt_track {
     mvt_imm_view_t view[MVT_MAX_CAMERAS]; /* per camera: was its last detection displaced, and by
                                              how much (mvt_imm_update_view) */
     mvt_real exist_lo;          /* MVT_LIFECYCLE_BODY: log odds that its person is in the volume */
+    int32_t dormant;            /* MVT_LIFECYCLE_BODY: 1 when its existence fell under exist_delete
+                                   after it was shown: its label waits MVT_BODY_DORMANT_S for the
+                                   person to be found again (mvt_body_birth.c), unseen and unshown */
+    int32_t was_shown;          /* MVT_LIFECYCLE_BODY: 1 once it has been shown confirmed */
     int32_t reserved2;          /* zero */
 } mvt_track_t;
 
@@ -390,6 +394,8 @@ typedef struct mvt_body_ws {
                                            track's head, -1 */
     int16_t owner[MVT_MAX_DETECTIONS];  /* this camera: the track a detection belongs to, or -1 */
     uint8_t free_det[MVT_MAX_CAMERAS][MVT_MAX_DETECTIONS]; /* this frame: explained by no track */
+    int16_t head_of[MVT_MAX_CAMERAS][MVT_MAX_DETECTIONS];  /* this frame: the track whose head the
+                                                              blob is, or -1 */
     mvt_body_cand_t cand[MVT_MAX_BIRTH_CANDIDATES];
     int num_cand;
 } mvt_body_ws_t;
