@@ -140,7 +140,7 @@ static int boxes_overlap(const mvt_real a[4], const mvt_real b[4])
     return a[0] < b[2] && b[0] < a[2] && a[1] < b[3] && b[1] < a[3];
 }
 
-int mvt_body_feet(const mvt_tracker_t *self, int k, const mvt_detection_t *det, int self_t, mvt_real uv[2])
+int mvt_body_feet_visible(const mvt_tracker_t *self, int k, const mvt_detection_t *det, int self_t, mvt_real uv[2])
 {
     const mvt_camera_t *cam = &self->cams[k];
     const mvt_real *b = det->box;
@@ -278,6 +278,7 @@ void mvt_body_step(mvt_tracker_t *self, const mvt_frame_t *frame, const int orde
             mvt_trk_predict(self, &self->tracks[t], frame->utime_us);
         }
     }
+    mvt_body_feet(self, frame);
     mvt_body_birth(self, frame, order, n_order, dt);
     mvt_body_prune(self);
 }

@@ -24,9 +24,10 @@
  *     explain     mvt_body_explain.c: per camera, a global assignment of blobs to heads on the
  *                 likelihood ratio of head against clutter; a blob left over whose top lies inside
  *                 a tracked silhouette below its head is that body's fragment; the rest unexplained
- *     update      mvt_body_update.c: a head updates its track (PKF), its blob's visible feet too; the
+ *     update      mvt_body_update.c: a head updates its track (PKF); the
  *                 existence takes the camera's evidence: detected, missed with a fragment of the
  *                 body in view (no evidence), or missed; the camera's clutter rate is learnt
+ *   feet         mvt_body_update.c: a track one camera alone placed takes its blob's visible feet
  *   birth        mvt_body_birth.c: each unexplained blob is the seed of a candidate: its head ray
  *                with the prior on head height, its feet where visible, then every other camera's
  *                unexplained blobs (or their absence where the head would show); a candidate is
@@ -98,7 +99,7 @@ mvt_real mvt_body_clutter_density(const mvt_tracker_t *self, int k);
  * picture's edge, and its box overlapping no silhouette (this camera's, ws.sil) of a body likely
  * present other than track `self_t` (-1: none is the blob's own): a nearer or merged body would
  * hide or be the bottom. uv receives the bottom's centre. 1 when visible. O(T). */
-int mvt_body_feet(const mvt_tracker_t *self, int k, const mvt_detection_t *det, int self_t, mvt_real uv[2]);
+int mvt_body_feet_visible(const mvt_tracker_t *self, int k, const mvt_detection_t *det, int self_t, mvt_real uv[2]);
 
 /* The innovation of feet seen at uv (raw pixels) in camera k against state s: the blob's lowest
  * point is the body's edge nearest the camera on the floor, (x, y, 0) moved body_halfwidth_m toward
@@ -124,6 +125,7 @@ void mvt_body_existence(mvt_tracker_t *self, mvt_real dt);
 void mvt_body_visibility(mvt_tracker_t *self, int k);
 void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k);
 void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_real dt);
+void mvt_body_feet(mvt_tracker_t *self, const mvt_frame_t *frame);
 void mvt_body_birth(mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order, mvt_real dt);
 void mvt_body_prune(mvt_tracker_t *self);
 

@@ -5,7 +5,7 @@
  * ray; before anything else is known, at the height of a standing adult's head (head_height_m,
  * spread head_height_sd_m along the ray: the prior). The candidate is a small Kalman estimate that
  * takes, in turn:
- *   the seed's feet, where visible (mvt_body_feet): the point under the head on the floor;
+ *   the seed's feet, where visible (mvt_body_feet_visible): the point under the head on the floor;
  *   every other observed camera: its unexplained blob nearest the candidate's predicted head inside
  *   the chi-square gate, or, where the head would be in its picture and shows no such blob, the
  *   miss.
@@ -129,7 +129,7 @@ static int seed_candidate(mvt_tracker_t *self, const mvt_frame_t *frame, const i
     cand->det[k] = (int16_t)d;
     mvt_real fuv[2];
     mvt_pkf_innov_t in;
-    if (mvt_body_feet(self, k, det, -1, fuv) && mvt_body_feet_innovation(self, &s, k, fuv, &in) == MVT_OK) {
+    if (mvt_body_feet_visible(self, k, det, -1, fuv) && mvt_body_feet_innovation(self, &s, k, fuv, &in) == MVT_OK) {
         const mvt_real span = (mvt_real)self->cams[k].height - det->v;
         const mvt_real nv = MVT_EXP(MVT_R(-0.5) * in.y[1] * in.y[1] / in.S[2]) / MVT_SQRT(MVT_R(6.2831853) * in.S[2]);
         cand->lo += MVT_LOG(MVT_BODY_P_FEET * nv * (span > MVT_R(1.0) ? span : MVT_R(1.0)) +

@@ -4,10 +4,12 @@
  * State: the head that explain gave the track updates it (the PKF in the configured linearisation,
  * through the motion model) when it lies inside the chi-square gate; a displaced one (beyond the
  * gate, within the motion model's outlier radius) is evidence that the person is there, not of
- * where. Where that blob's bottom is visible feet (mvt_body_feet: not cut by
- * the picture, no other body's silhouette on it), the feet observe the point under the head on the
- * floor, (x, y, 0): with the head's ray they fix the distance along it, which is what one view
- * leaves open.
+ * where. After every camera (mvt_body_feet), a track whose head one camera alone placed this frame
+ * takes that blob's feet where they are visible (mvt_body_feet_visible: not cut by the picture, no
+ * other body's silhouette on the blob, the head not judged displaced): the point under the head on
+ * the floor. With the head's ray they fix the distance along it, which is what one view leaves
+ * open; where two or more views place the head, their rays do, and feet (whose offset from the
+ * head's vertical is a body's, not a pixel's) measured worse there (docs/body-model.md).
  * Existence (the integrated PDA's recursion with this camera's detection probability p):
  *   head detected with density N (its own, or    odds *= 1 - p + p N / lambda
  *   displaced: mvt_body_head_density)
@@ -24,6 +26,7 @@
 #include <stddef.h>
 #ifdef MVT_BODY_DEBUG
 #include <stdio.h>
+#include <stdlib.h>
 #endif
 
 /* Camera k's visible feet of track t's blob d, as a measurement of the point under the head. */
@@ -31,7 +34,10 @@ static void update_feet(mvt_tracker_t *self, mvt_track_t *tr, int t, int k, cons
 {
     mvt_real uv[2];
     mvt_pkf_innov_t in;
-    if (!mvt_body_feet(self, k, det, t, uv) || mvt_body_feet_innovation(self, &tr->s, k, uv, &in) != MVT_OK ||
+#ifdef MVT_BODY_DEBUG
+    if (getenv("NOFEET") && getenv("NOFEET")[0] == 0x31) return;
+#endif
+    if (!mvt_body_feet_visible(self, k, det, t, uv) || mvt_body_feet_innovation(self, &tr->s, k, uv, &in) != MVT_OK ||
         !(in.d2 <= self->cfg.gate_chi2)) {
         return;
     }
@@ -40,12 +46,32 @@ static void update_feet(mvt_tracker_t *self, mvt_track_t *tr, int t, int k, cons
         err = mvt_pkf_update(&tr->s, &in);
     } else {
         const mvt_real noise[4] = {in.r, MVT_R(0.0), MVT_R(0.0), in.r};
-        err = mvt_imm_update_pos(&tr->imm, &self->cfg.motion, 2, in.H, in.y, noise, &tr->s);
+        err = mvt_imm_update(&tr->imm, &self->cfg.motion, 2, in.H, in.y, noise, &tr->s);
     }
     if (err == MVT_OK) {
         self->counters.foot_updates++;
     } else {
         self->counters.numeric_faults++;
+    }
+}
+
+void mvt_body_feet(mvt_tracker_t *self, const mvt_frame_t *frame)
+{
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        mvt_track_t *tr = &self->tracks[t];
+        if (tr->id == 0 || tr->dormant || mvt_trk_popcount(tr->cameras_used) != 1) {
+            continue;
+        }
+        for (int k = 0; k < self->num_cameras; k++) {
+            if (!(tr->cameras_used & (1u << k)) || !(tr->view[k].p < MVT_R(0.5))) {
+                continue; /* not this camera's, or its blob was judged displaced */
+            }
+            for (int d = 0; d < self->num_meas[k]; d++) {
+                if (self->body.head_of[k][d] == t) {
+                    update_feet(self, tr, t, k, &frame->views[k].det[d]);
+                }
+            }
+        }
     }
 }
 
@@ -144,9 +170,6 @@ void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_rea
         }
         self->counters.updates++;
         const mvt_detection_t *det = &view->det[d];
-        if (tr->view[k].p < MVT_R(0.5)) { /* the blob is the person's, not a displaced one */
-            update_feet(self, tr, t, k, det);
-        }
         if (self->chroma_ok[k][d] && mvt_trk_box_ok(det->box) && alone_in_blob(self, k, t, det->box)) {
             mvt_trk_app_update(&tr->app, self->chroma[k][d]);
         }

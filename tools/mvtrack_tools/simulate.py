@@ -45,15 +45,16 @@ def experiment1(rig: Rig, seconds: float, var_px2: float, occlusion: bool, seed:
 
 
 def _with_boxes(cam, head: np.ndarray, dets) -> list[tuple]:
-    """The person's blob box (the body under the head, cut by the picture) moved with each detection's
-    offset from the true head: the blob is where the detector put its top."""
+    """The person's blob box: the body under the head, cut by the picture. The head point's pixel
+    noise is its own (the box's edges are other pixels); a burst's displaced detection (an occlusion,
+    a bad segmentation) carries its box with it."""
     box = body_box(cam, head)
     if box is None:
         return [(u, v) for (u, v, _) in dets]
     true_uv = cam.project(head[None])[0]
     out = []
-    for (u, v, _) in dets:
-        du, dv = u - true_uv[0], v - true_uv[1]
+    for (u, v, is_true) in dets:
+        du, dv = (0.0, 0.0) if is_true else (u - true_uv[0], v - true_uv[1])
         b = (max(0.0, box[0] + du), max(0.0, box[1] + dv), min(cam.width - 1.0, box[2] + du),
              min(cam.height - 1.0, box[3] + dv))
         out.append((u, v, b) if b[2] > b[0] and b[3] > b[1] else (u, v))
