@@ -9,8 +9,8 @@
  * max_pos_std_m (nobody has seen it for long: it is nowhere in particular), or when it leaves the
  * volume widened by volume_margin_m.
  * Bodies do not overlap: a track no camera placed this frame is kept a body's width from those the
- * cameras placed (a truncation along their horizontal separation).
- * Two heads closer than body_halfwidth_m horizontally are one person (two bodies cannot stand
+ * cameras placed and from likelier unplaced ones (a truncation along their horizontal separation).
+ * Two heads closer than body_halfwidth_m horizontally, one of them placed this frame, are one person (two bodies cannot stand
  * inside each other): the track with the likelier estimate (the higher existence) goes on with its
  * own identity, or with the other's when only the other was shown confirmed.
  * Status: confirmed from the frame the existence first reaches exist_confirm, for as long as it
@@ -23,9 +23,17 @@
 
 #include <math.h>
 #include <string.h>
+#ifdef MVT_BODY_DEBUG
+#include <stdio.h>
+#endif
 
 static void end_track(mvt_tracker_t *self, mvt_track_t *tr, uint64_t *reason)
 {
+#ifdef MVT_BODY_DEBUG
+    fprintf(stderr, "END %lld id%d reason %s lo %.2f dormant %d x %.2f %.2f %.2f\n", (long long)self->last_utime_us, tr->id,
+            reason == &self->counters.deleted_unlikely ? "unlikely" : reason == &self->counters.deleted_uncertain ? "uncertain" : reason == &self->counters.deleted_outside ? "outside" : "dup",
+            (double)tr->exist_lo, tr->dormant, (double)tr->s.x[0], (double)tr->s.x[1], (double)tr->s.x[2]);
+#endif
     (*reason)++;
     self->counters.deletions++;
     memset(tr, 0, sizeof(*tr));
@@ -69,8 +77,8 @@ void mvt_body_prune(mvt_tracker_t *self)
         }
     }
     /* bodies do not overlap: a track no camera placed this frame (hidden, or missed) is kept a
-     * body's width (2 body_halfwidth_m, horizontally) from every track a camera placed; its height
-     * stays as it is (a ground-plane truncation of the prediction) */
+     * body's width (2 body_halfwidth_m, horizontally) from every track a camera placed and from
+     * every likelier one nobody placed; its height stays as it is (a ground-plane truncation) */
     const mvt_real width = MVT_R(2.0) * c->body_halfwidth_m;
     for (int a = 0; a < MVT_MAX_TARGETS; a++) {
         mvt_track_t *ta = &self->tracks[a];
@@ -79,8 +87,9 @@ void mvt_body_prune(mvt_tracker_t *self)
         }
         for (int b = 0; b < MVT_MAX_TARGETS; b++) {
             const mvt_track_t *tb = &self->tracks[b];
-            if (b == a || tb->id == 0 || tb->cameras_used == 0u || !(tb->exist_lo > MVT_R(0.0)) || tb->dormant) {
-                continue;
+            if (b == a || tb->id == 0 || !(tb->exist_lo > MVT_R(0.0)) || tb->dormant ||
+                (tb->cameras_used == 0u && !(tb->exist_lo > ta->exist_lo))) {
+                continue; /* only the placed, or the likelier of two unplaced, holds its ground */
             }
             const mvt_real dx = ta->s.x[0] - tb->s.x[0], dy = ta->s.x[1] - tb->s.x[1];
             const mvt_real dist = MVT_SQRT(dx * dx + dy * dy);
@@ -99,8 +108,8 @@ void mvt_body_prune(mvt_tracker_t *self)
     for (int a = 0; a < MVT_MAX_TARGETS; a++) {
         for (int b = a + 1; b < MVT_MAX_TARGETS && self->tracks[a].id != 0; b++) {
             mvt_track_t *ta = &self->tracks[a], *tb = &self->tracks[b];
-            if (tb->id == 0 || ta->dormant || tb->dormant) {
-                continue;
+            if (tb->id == 0 || ta->dormant || tb->dormant || (ta->cameras_used == 0u && tb->cameras_used == 0u)) {
+                continue; /* two estimates nobody placed that drift together are kept apart above */
             }
             const mvt_real dx = ta->s.x[0] - tb->s.x[0], dy = ta->s.x[1] - tb->s.x[1];
             if (!(dx * dx + dy * dy < sep2)) {
