@@ -29,9 +29,6 @@
 
 #include <math.h>
 #include <string.h>
-#ifdef MVT_BODY_DEBUG
-#include <stdio.h>
-#endif
 
 static mvt_real dot3(const mvt_real a[3], const mvt_real b[3])
 {
@@ -164,9 +161,6 @@ static int seed_candidate(mvt_tracker_t *self, const mvt_frame_t *frame, const i
             }
         }
         if (best < 0) {
-#ifdef MVT_BODY_DEBUG
-            fprintf(stderr, "  MISS k%d p %.2f uv %.0f %.0f\n", j, (double)p, (double)pred.h[0], (double)pred.h[1]);
-#endif
             cand->lo += MVT_LOG(MVT_R(1.0) - p);
             continue;
         }
@@ -182,9 +176,6 @@ static int seed_candidate(mvt_tracker_t *self, const mvt_frame_t *frame, const i
             cand->P[i * 3 + j] = s.P[i * 6 + j];
         }
     }
-#ifdef MVT_BODY_DEBUG
-    fprintf(stderr, "SEED %lld k%d d%d lo %.2f x %.2f %.2f %.2f in %d\n", (long long)frame->utime_us, k, d, (double)cand->lo, (double)cand->x[0], (double)cand->x[1], (double)cand->x[2], mvt_trk_inside_volume(c, cand->x));
-#endif
     return mvt_trk_inside_volume(c, cand->x) && cand->x[2] > MVT_R(0.0);
 }
 
@@ -247,9 +238,6 @@ static int heir_of(const mvt_tracker_t *self, const mvt_body_cand_t *cand)
             P[4] += reach * reach;
         }
         const mvt_real d2 = mvt_trk_mahalanobis3(tr->s.x, P, cand->x, cand->P, NULL);
-#ifdef MVT_BODY_DEBUG
-        fprintf(stderr, "HEIR id%d dormant %d d2 %.1f x %.2f %.2f %.2f cand %.2f %.2f %.2f\n", tr->id, tr->dormant, (double)d2, (double)tr->s.x[0], (double)tr->s.x[1], (double)tr->s.x[2], (double)cand->x[0], (double)cand->x[1], (double)cand->x[2]);
-#endif
         if (d2 >= MVT_R(0.0) && d2 < best_d2) {
             best = t;
             best_d2 = d2;
@@ -298,11 +286,6 @@ void mvt_body_birth(mvt_tracker_t *self, const mvt_frame_t *frame, const int ord
         }
         done[best] = 1;
         const mvt_body_cand_t *cand = &ws->cand[best];
-#ifdef MVT_BODY_DEBUG
-        fprintf(stderr, "CAND %lld seed k%d lo %.2f x %.2f %.2f %.2f dets", (long long)frame->utime_us, seed_cam[best], (double)cand->lo, (double)cand->x[0], (double)cand->x[1], (double)cand->x[2]);
-        for (int j = 0; j < self->num_cameras; j++) fprintf(stderr, " %d", cand->det[j]);
-        fprintf(stderr, " adm %d\n", admissible(self, frame, cand, seed_cam[best], taken, born, n_born));
-#endif
         if (!admissible(self, frame, cand, seed_cam[best], taken, born, n_born)) {
             continue;
         }

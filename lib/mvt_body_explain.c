@@ -21,9 +21,6 @@
 
 #include <math.h>
 #include <stddef.h>
-#ifdef MVT_BODY_DEBUG
-#include <stdio.h>
-#endif
 
 /* Gains are offset by this constant to make the solver's costs non-negative (it forbids < 0). */
 #define GAIN_OFFSET MVT_R(1000.0)
@@ -61,18 +58,11 @@ void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k)
             cost[i * nc + nd + i] = GAIN_OFFSET;
             for (int d = 0; d < nd; d++) {
                 mvt_pkf_innov_t in;
-#ifdef MVT_BODY_DEBUG
-                { mvt_pkf_innov_t q; int e = mvt_pkf_innovation_from(&self->pred[t], &self->meas[k][d], NULL, &q);
-                  fprintf(stderr, "TRY %lld k%d id%d d%d ok%d e%d d2 %.1f y %.1f %.1f S %.1f %.1f\n", (long long)view->utime_us, k, self->tracks[t].id, d, self->meas_ok[k][d], e, (double)q.d2, (double)q.y[0], (double)q.y[1], (double)q.S[0], (double)q.S[2]); }
-#endif
                 if (!self->meas_ok[k][d] || !(rp > MVT_R(0.0)) ||
                     mvt_pkf_innovation_from(&self->pred[t], &self->meas[k][d], NULL, &in) != MVT_OK) {
                     continue;
                 }
                 const mvt_real dens = mvt_body_head_density(self, &in);
-#ifdef MVT_BODY_DEBUG
-                fprintf(stderr, "GATE %lld k%d id%d d%d d2 %.1f y %.1f %.1f S %.1f %.1f rp %.2f\n", (long long)view->utime_us, k, self->tracks[t].id, d, (double)in.d2, (double)in.y[0], (double)in.y[1], (double)in.S[0], (double)in.S[2], (double)rp);
-#endif
                 if (!(dens > MVT_R(0.0))) {
                     continue;
                 }
@@ -110,9 +100,6 @@ void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k)
                 best = t;
             }
         }
-#ifdef MVT_BODY_DEBUG
-        fprintf(stderr, "LEFT %lld k%d d%d uv %.0f %.0f frag_of %d\n", (long long)view->utime_us, k, d, (double)uv[0], (double)uv[1], best >= 0 ? self->tracks[best].id : -1);
-#endif
         if (best >= 0) {
             ws->owner[d] = (int16_t)best;
             if (ws->frag[best] < 0) {

@@ -23,17 +23,9 @@
 
 #include <math.h>
 #include <string.h>
-#ifdef MVT_BODY_DEBUG
-#include <stdio.h>
-#endif
 
 static void end_track(mvt_tracker_t *self, mvt_track_t *tr, uint64_t *reason)
 {
-#ifdef MVT_BODY_DEBUG
-    fprintf(stderr, "END %lld id%d reason %s lo %.2f dormant %d x %.2f %.2f %.2f\n", (long long)self->last_utime_us, tr->id,
-            reason == &self->counters.deleted_unlikely ? "unlikely" : reason == &self->counters.deleted_uncertain ? "uncertain" : reason == &self->counters.deleted_outside ? "outside" : "dup",
-            (double)tr->exist_lo, tr->dormant, (double)tr->s.x[0], (double)tr->s.x[1], (double)tr->s.x[2]);
-#endif
     (*reason)++;
     self->counters.deletions++;
     memset(tr, 0, sizeof(*tr));

@@ -24,19 +24,12 @@
 
 #include <math.h>
 #include <stddef.h>
-#ifdef MVT_BODY_DEBUG
-#include <stdio.h>
-#include <stdlib.h>
-#endif
 
 /* Camera k's visible feet of track t's blob d, as a measurement of the point under the head. */
 static void update_feet(mvt_tracker_t *self, mvt_track_t *tr, int t, int k, const mvt_detection_t *det)
 {
     mvt_real uv[2];
     mvt_pkf_innov_t in;
-#ifdef MVT_BODY_DEBUG
-    if (getenv("NOFEET") && getenv("NOFEET")[0] == 0x31) return;
-#endif
     if (!mvt_body_feet_visible(self, k, det, t, uv) || mvt_body_feet_innovation(self, &tr->s, k, uv, &in) != MVT_OK ||
         !(in.d2 <= self->cfg.gate_chi2)) {
         return;
@@ -137,10 +130,6 @@ void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_rea
         }
         const mvt_real p = ws->pd[t];
         const int d = ws->assign[t];
-#ifdef MVT_BODY_DEBUG
-        fprintf(stderr, "DBG %lld k%d id%d lo %.2f pd %.2f a%d f%d h%d x %.2f %.2f %.2f pdk %.2f clut %.3f\n", (long long)view->utime_us, k, tr->id,
-                (double)tr->exist_lo, (double)p, d, ws->frag[t], ws->host[t], (double)tr->s.x[0], (double)tr->s.x[1], (double)tr->s.x[2], (double)self->p_detect_k[k], (double)self->clutter_n[k]);
-#endif
         if (d < 0) {
             if (ws->host[t] >= 0) {
                 tr->exist_lo += MVT_LOG(MVT_R(1.0) - p * MVT_BODY_P_SHOWN_HIDDEN);
