@@ -132,7 +132,8 @@ mvt_real mvt_body_head_density(const mvt_tracker_t *self, const mvt_pkf_innov_t 
 mvt_real mvt_body_clutter_density(const mvt_tracker_t *self, int k)
 {
     const mvt_camera_t *cam = &self->cams[k];
-    return self->clutter_n[k] / ((mvt_real)cam->width * (mvt_real)cam->height);
+    const mvt_real now = self->body.clutter_now[k];
+    return (now > self->clutter_n[k] ? now : self->clutter_n[k]) / ((mvt_real)cam->width * (mvt_real)cam->height);
 }
 
 static int boxes_overlap(const mvt_real a[4], const mvt_real b[4])
@@ -254,6 +255,7 @@ void mvt_body_step(mvt_tracker_t *self, const mvt_frame_t *frame, const int orde
             self->body.axis[k][t][4] = MVT_R(-1.0);
         }
         memset(self->body.free_det[k], 0, sizeof(self->body.free_det[k]));
+        self->body.clutter_now[k] = MVT_R(0.0);
         for (int d = 0; d < MVT_MAX_DETECTIONS; d++) {
             self->body.head_of[k][d] = -1;
         }

@@ -92,7 +92,9 @@ int mvt_body_on_body_below_head(const mvt_real axis[5], const mvt_real uv[2]);
  * below its top (head_v: the head's row). */
 int mvt_body_below_head(const mvt_real box[4], mvt_real head_v, const mvt_real uv[2]);
 
-/* Camera k's clutter density: false blobs per frame over the picture's area, 1/px^2. */
+/* Camera k's clutter density: false blobs per frame over the picture's area, 1/px^2: the learnt
+ * rate, or this frame's blobs beyond the heads it may show when they are more (a flood of false
+ * alarms begins in one frame; a running mean would take seconds to believe it). */
 mvt_real mvt_body_clutter_density(const mvt_tracker_t *self, int k);
 
 /* The feet of blob det of camera k, when its bottom is visible: not within MVT_BODY_EDGE_PX of the

@@ -29,7 +29,6 @@ void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k)
 {
     mvt_body_ws_t *ws = &self->body;
     const int nd = self->num_meas[k];
-    const mvt_real lambda = mvt_body_clutter_density(self, k);
     int16_t rows[MVT_MAX_TARGETS];
     int nr = 0;
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
@@ -44,6 +43,16 @@ void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k)
         ws->owner[d] = -1;
         ws->head_of[k][d] = -1;
     }
+    {
+        /* this frame's blobs (all the camera sent, kept or not) beyond the heads it may show */
+        int shown = 0;
+        for (int i = 0; i < nr; i++) {
+            shown += ws->pd[rows[i]] > MVT_R(0.0);
+        }
+        const int sent = view->num_offered > nd ? view->num_offered : nd;
+        ws->clutter_now[k] = sent > shown ? (mvt_real)(sent - shown) : MVT_R(0.0);
+    }
+    const mvt_real lambda = mvt_body_clutter_density(self, k);
     if (nr > 0 && nd > 0) {
         const int nc = nd + nr;
         mvt_real *cost = self->cl_cost;

@@ -398,6 +398,8 @@ typedef struct mvt_body_ws {
                                                               blob is, or -1 */
     mvt_body_cand_t cand[MVT_MAX_BIRTH_CANDIDATES];
     int num_cand;
+    mvt_real clutter_now[MVT_MAX_CAMERAS]; /* this frame: each camera's blobs beyond the tracked
+                                              heads it may show (a lower bound of its clutter) */
 } mvt_body_ws_t;
 
 typedef struct mvt_birth_cand {
