@@ -27,7 +27,8 @@
  *     update      mvt_body_update.c: a head updates its track (PKF); the
  *                 existence takes the camera's evidence: detected, missed with a fragment of the
  *                 body in view (no evidence), or missed; the camera's clutter rate is learnt
- *   feet         mvt_body_update.c: a track one camera alone placed takes its blob's visible feet
+ *   one view     mvt_body_update.c: a track one camera alone placed takes its blob's visible feet;
+ *                a track fewer than two placed keeps the person's height (the last two views gave)
  *   birth        mvt_body_birth.c: each unexplained blob is the seed of a candidate: its head ray
  *                with the prior on head height, its feet where visible, then every other camera's
  *                unexplained blobs (or their absence where the head would show); a candidate is
@@ -47,6 +48,11 @@
  * given up: a person lost in a knot who walks out elsewhere, or hidden longer than the existence
  * lasts, is found again under their own label (mvt_body_birth.c, heir_of). */
 #define MVT_BODY_DORMANT_S MVT_R(3.0)
+/* The person's height: a track fewer than two views place this frame keeps its head within this
+ * many spreads of the height two views last gave it, the spread being that estimate's and a walking
+ * head's bob (MVT_BODY_HEAD_BOB_M, m). */
+#define MVT_BODY_HEIGHT_BAND MVT_R(3.0)
+#define MVT_BODY_HEAD_BOB_M MVT_R(0.04)
 /* A camera's detection probability (a visible head reported inside its gate) is a running mean
  * over this time, s, of its likely-present tracks' hits, within MVT_BODY_PD_MIN..MVT_BODY_PD_MAX:
  * misses come in runs (a bad segmentation, a burst of noise) that independent frames at the
@@ -127,7 +133,7 @@ void mvt_body_existence(mvt_tracker_t *self, mvt_real dt);
 void mvt_body_visibility(mvt_tracker_t *self, int k);
 void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k);
 void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_real dt);
-void mvt_body_feet(mvt_tracker_t *self, const mvt_frame_t *frame);
+void mvt_body_one_view(mvt_tracker_t *self, const mvt_frame_t *frame);
 void mvt_body_birth(mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order, mvt_real dt);
 void mvt_body_prune(mvt_tracker_t *self);
 

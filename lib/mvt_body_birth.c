@@ -308,6 +308,8 @@ void mvt_body_birth(mvt_tracker_t *self, const mvt_frame_t *frame, const int ord
             tr->status = old.was_shown ? MVT_TRACK_CONFIRMED : old.status; /* shown before */
             tr->was_shown = old.was_shown;
             tr->app = old.app;
+            tr->seen_z = old.seen_z;
+            tr->seen_zz = old.seen_zz;
             tr->exist_lo = old.dormant || cand->lo > old.exist_lo ? cand->lo : old.exist_lo;
             self->counters.reacquired++;
         } else {
@@ -319,6 +321,12 @@ void mvt_body_birth(mvt_tracker_t *self, const mvt_frame_t *frame, const int ord
             tr->exist_lo = cand->lo;
             mvt_trk_app_reset(&tr->app);
             self->counters.births++;
+        }
+        /* the person's height until two views place them: the candidate's, or the one the label
+         * carried */
+        if (!(tr->seen_zz > MVT_R(0.0))) {
+            tr->seen_z = cand->x[2];
+            tr->seen_zz = cand->P[8];
         }
         tr->last_update_us = frame->utime_us;
         for (int j = 0; j < self->num_cameras; j++) {

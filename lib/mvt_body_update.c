@@ -4,12 +4,15 @@
  * State: the head that explain gave the track updates it (the PKF in the configured linearisation,
  * through the motion model) when it lies inside the chi-square gate; a displaced one (beyond the
  * gate, within the motion model's outlier radius) is evidence that the person is there, not of
- * where. After every camera (mvt_body_feet), a track whose head one camera alone placed this frame
+ * where. After every camera (mvt_body_one_view), a track whose head one camera alone placed this frame
  * takes that blob's feet where they are visible (mvt_body_feet_visible: not cut by the picture, no
  * other body's silhouette on the blob, the head not judged displaced): the point under the head on
  * the floor. With the head's ray they fix the distance along it, which is what one view leaves
  * open; where two or more views place the head, their rays do, and feet (whose offset from the
- * head's vertical is a body's, not a pixel's) measured worse there (docs/body-model.md).
+ * head's vertical is a body's, not a pixel's) measured worse there (docs/body-model.md). The
+ * person's height is the head's height the last frame two views placed it (or its birth's); a track
+ * fewer views place keeps its head within MVT_BODY_HEIGHT_BAND spreads of it (a truncation): one
+ * view's update slides the head along the ray, and the height with it.
  * Existence (the integrated PDA's recursion with this camera's detection probability p):
  *   head detected with density N (its own, or    odds *= 1 - p + p N / lambda
  *   displaced: mvt_body_head_density)
@@ -48,22 +51,43 @@ static void update_feet(mvt_tracker_t *self, mvt_track_t *tr, int t, int k, cons
     }
 }
 
-void mvt_body_feet(mvt_tracker_t *self, const mvt_frame_t *frame)
+/* Track t, placed by one camera this frame: that blob's visible feet. */
+static void feet_of_one_view(mvt_tracker_t *self, mvt_track_t *tr, int t, const mvt_frame_t *frame)
 {
+    for (int k = 0; k < self->num_cameras; k++) {
+        if (!(tr->cameras_used & (1u << k)) || !(tr->view[k].p < MVT_R(0.5))) {
+            continue; /* not this camera's, or its blob was judged displaced */
+        }
+        for (int d = 0; d < self->num_meas[k]; d++) {
+            if (self->body.head_of[k][d] == t) {
+                update_feet(self, tr, t, k, &frame->views[k].det[d]);
+            }
+        }
+    }
+}
+
+void mvt_body_one_view(mvt_tracker_t *self, const mvt_frame_t *frame)
+{
+    static const mvt_real Hz[3] = {MVT_R(0.0), MVT_R(0.0), MVT_R(1.0)};
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         mvt_track_t *tr = &self->tracks[t];
-        if (tr->id == 0 || tr->dormant || mvt_trk_popcount(tr->cameras_used) != 1) {
+        if (tr->id == 0 || tr->dormant) {
             continue;
         }
-        for (int k = 0; k < self->num_cameras; k++) {
-            if (!(tr->cameras_used & (1u << k)) || !(tr->view[k].p < MVT_R(0.5))) {
-                continue; /* not this camera's, or its blob was judged displaced */
-            }
-            for (int d = 0; d < self->num_meas[k]; d++) {
-                if (self->body.head_of[k][d] == t) {
-                    update_feet(self, tr, t, k, &frame->views[k].det[d]);
-                }
-            }
+        if (mvt_trk_popcount(tr->cameras_placed) >= 2) {
+            tr->seen_z = tr->s.x[2]; /* the person's height, where two views' rays meet */
+            tr->seen_zz = tr->s.P[14];
+            continue;
+        }
+        if (mvt_trk_popcount(tr->cameras_used) == 1) {
+            feet_of_one_view(self, tr, t, frame);
+        }
+        /* fewer than two views: the head's height stays within the person's (a one-view update
+         * slides along the ray, and with it the height) */
+        const mvt_real w = MVT_BODY_HEIGHT_BAND * MVT_SQRT(tr->seen_zz + MVT_BODY_HEAD_BOB_M * MVT_BODY_HEAD_BOB_M);
+        const mvt_err_t err = mvt_trk_truncate(self, tr, Hz, tr->s.x[2], tr->seen_z - w, tr->seen_z + w);
+        if (err != MVT_OK && err != MVT_ERR_NUMERIC) {
+            self->counters.numeric_faults++;
         }
     }
 }
