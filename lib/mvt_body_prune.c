@@ -3,8 +3,9 @@
  * status, all from the model.
  *
  * A track ends when its existence falls under exist_delete (the cameras say nobody is there, or
- * its person walked out through a wall): one that was shown confirmed first sleeps (dormant, unseen
- * and unshown) MVT_BODY_DORMANT_S, its label kept for the person found again nearby. It ends too
+ * its person walked out through a wall): one that was shown confirmed first, away from the side walls
+ * (where people leave), sleeps (dormant, unseen and unshown) MVT_BODY_DORMANT_S, its label kept for
+ * the person found again nearby. It ends too
  * when its horizontal position is spread wider than
  * max_pos_std_m (nobody has seen it for long: it is nowhere in particular), or when it leaves the
  * volume widened by volume_margin_m.
@@ -31,6 +32,13 @@ static void end_track(mvt_tracker_t *self, mvt_track_t *tr, uint64_t *reason)
     memset(tr, 0, sizeof(*tr));
 }
 
+/* Within exit_margin_m of the volume's side walls: where people leave (mvt_body_existence). */
+static int near_side_wall(const mvt_tracker_config_t *c, const mvt_real x[3])
+{
+    return x[0] < c->volume_min[0] + c->exit_margin_m || x[0] > c->volume_max[0] - c->exit_margin_m ||
+           x[1] < c->volume_min[1] + c->exit_margin_m || x[1] > c->volume_max[1] - c->exit_margin_m;
+}
+
 static int shown(const mvt_track_t *tr)
 {
     return tr->status == MVT_TRACK_CONFIRMED || tr->status == MVT_TRACK_COASTING;
@@ -55,10 +63,12 @@ void mvt_body_prune(mvt_tracker_t *self)
                 end_track(self, tr, &self->counters.deleted_unlikely);
             }
         } else if (!(tr->exist_lo >= lo_delete)) {
-            if (tr->was_shown) {
+            if (tr->was_shown && !near_side_wall(c, tr->s.x)) {
                 tr->dormant = 1; /* the label waits for its person (heir_of, mvt_body_birth.c) */
                 tr->status = MVT_TRACK_TENTATIVE;
                 tr->last_update_us = self->last_utime_us; /* asleep since */
+            } else if (tr->was_shown) {
+                end_track(self, tr, &self->counters.deleted_exit); /* walked out */
             } else {
                 end_track(self, tr, &self->counters.deleted_unlikely);
             }
