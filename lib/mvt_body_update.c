@@ -17,7 +17,8 @@
  *   head detected with density N (its own, or    odds *= 1 - p + p N / lambda
  *   displaced: mvt_body_head_density)
  *   head missed, a fragment of the body in view  odds unchanged (the body is there; its head's
- *                                                blob is not, for reasons the model does not hold)
+ *                                                blob is not, for reasons the model does not hold),
+ *                                                and the head's column stays between its sides
  *   head missed inside a merged blob (its host)   odds *= 1 - p MVT_BODY_P_SHOWN_HIDDEN, and the
  *                                                head's column stays between the blob's sides
  *   head missed                                   odds *= 1 - p
@@ -105,8 +106,8 @@ static int alone_in_blob(const mvt_tracker_t *self, int k, int t, const mvt_real
     return 1;
 }
 
-/* Track t inside merged blob d of camera k: its head's column lies between the blob's sides
- * (a truncation of the prediction's image column, mvt_cv_truncate). */
+/* Track t inside merged blob d of camera k, or owning fragment d: its head's column lies between
+ * the blob's sides (a truncation of the prediction's image column, mvt_cv_truncate). */
 static void keep_in_blob(mvt_tracker_t *self, mvt_track_t *tr, int k, const mvt_detection_t *det)
 {
     mvt_pkf_pred_t p;
@@ -158,7 +159,9 @@ void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_rea
             if (ws->host[t] >= 0) {
                 tr->exist_lo += MVT_LOG(MVT_R(1.0) - p * MVT_BODY_P_SHOWN_HIDDEN);
                 keep_in_blob(self, tr, k, &view->det[ws->host[t]]);
-            } else if (ws->frag[t] < 0) {
+            } else if (ws->frag[t] >= 0) {
+                keep_in_blob(self, tr, k, &view->det[ws->frag[t]]); /* the piece holds the body's column */
+            } else {
                 tr->exist_lo += MVT_LOG(MVT_R(1.0) - p);
             }
             continue;

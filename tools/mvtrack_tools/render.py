@@ -10,6 +10,11 @@ OpenCV's lens model, cv2.undistortPoints) and keeps the nearest hit.
 The motion-segmentation mask is what a background subtractor gives, not the true silhouette:
 - furniture in front of a person hides them (it is static: never foreground);
 - holes: low-frequency noise removes `hole_frac` of the body's pixels (fragmented blobs);
+- fragmentation model (`fragments`): "holes" (only the holes above), "rows" (also: each camera
+  loses the body's pixels on a few fixed bands of image rows, as where a railing or a wall stripe
+  the colour of the clothes crosses the picture: every body is cut at the same rows), or
+  "camouflage" (also: a person's trousers or shirt, chosen per person, match the background and
+  are never foreground: a head over legs with nothing between, or a head and torso without legs);
 - a soft shadow on the floor next to the feet is foreground (grey, unsaturated);
 - speckle: `speckle` of the background pixels flip to foreground;
 - clutter: Poisson(`clutter_rate`) small blobs per camera and frame (reflections, a moving chair).
@@ -55,6 +60,7 @@ class MaskModel:
     hue_noise: float = 0.015
     sat_noise: float = 0.04
     min_area: int = 12           # mask pixels for a detection
+    fragments: str = "holes"     # holes | rows | camouflage (see the module's text)
 
 
 def default_furniture(rig: Rig) -> list[Box]:
@@ -155,6 +161,7 @@ class Renderer:
         self.furniture = default_furniture(rig) if furniture is None else furniture
         rng = np.random.default_rng(seed + 7919)
         self.rays, self.centres, self.static_t, self.bg_h, self.bg_s = [], [], [], [], []
+        self.cut_rows: list[np.ndarray] = []
         for cam in rig.cameras:
             D = _rays(cam, self.m.scale)
             C = cam.centre
@@ -169,6 +176,12 @@ class Renderer:
             tex = cv2.resize(rng.uniform(0, 1, (max(2, hm // 12), max(2, wm // 12))), (wm, hm))
             self.bg_h.append((0.09 + 0.05 * tex) % 1.0)
             self.bg_s.append(0.08 + 0.12 * tex)
+            # "rows": three bands of 1-2 mask rows where bodies are cut, in the lower 80 % of the picture
+            band = np.zeros(hm, bool)
+            for _ in range(3):
+                r0 = int(rng.uniform(0.2, 0.95) * hm)
+                band[r0:r0 + int(rng.integers(1, 3))] = True
+            self.cut_rows.append(band)
 
     def render(self, k: int, people: list[tuple[int, np.ndarray, int]], rng: np.random.Generator) -> CameraView:
         """people: (gid, head-top position, palette index). One camera's mask, colour and blobs."""
@@ -193,6 +206,17 @@ class Renderer:
                 hue[near] = ph
                 sat[near] = ps
         body = label > 0
+        if m.fragments == "camouflage":
+            # per person (by identity, so it lasts): 0 nothing, 1 trousers, 2 shirt like the background
+            for gid, head, _ in people:
+                which = (gid * 2654435761) % 3
+                if which:
+                    h = float(head[2])
+                    lo, hi = (0.0, 0.52 * h) if which == 1 else (0.52 * h, h - 0.22)
+                    t = _hit_cylinder(C, D, float(head[0]), float(head[1]), TORSO_R if which == 2 else LEGS_R, lo, hi)
+                    body &= ~((label == gid) & (np.abs(t - zbuf) < 1e-6))
+        if m.fragments == "rows":
+            body &= ~self.cut_rows[k][:, None]
         fg |= body
         if m.shadow:  # floor patch beside the feet, unsaturated, where nothing nearer is drawn
             with np.errstate(divide="ignore", invalid="ignore"):

@@ -137,6 +137,10 @@ def main(argv: list[str] | None = None) -> int:
                          "--sigma, --miss, --fa and --no-merge do not apply (the pixels decide)")
     ap.add_argument("--no-colour", action="store_true", help="with --render: masks without hue/saturation (MS)")
     ap.add_argument("--mask-scale", type=int, default=4, help="with --render: image pixels per mask pixel (default 4)")
+    ap.add_argument("--fragments", choices=["holes", "rows", "camouflage"], default="holes",
+                    help="with --render: how bodies break into pieces: holes (default), rows (every body also cut "
+                         "on a few fixed bands of image rows per camera), camouflage (a person's trousers or "
+                         "shirt match the background)")
     ap.add_argument("--video", type=Path, metavar="DIR",
                     help="crowd, interaction: render RGB video per camera (DIR/<camera>.avi, MJPEG) through the "
                          "rig's lens model, with GROUND_TRUTH in --log; run tools/mvtrack detect on it")
@@ -196,7 +200,7 @@ def main(argv: list[str] | None = None) -> int:
                 scene = crowd_scene(rig, a.seconds, a.seed, model=model) if a.scene == "crowd" else \
                     interaction_scene(rig, a.frames, a.seed, model=model)
                 buf = _Buffer() if a.live is not None else sink
-                stats = write_rendered(buf, scene, Renderer(rig, MaskModel(scale=a.mask_scale), seed=a.seed), a.seed,
+                stats = write_rendered(buf, scene, Renderer(rig, MaskModel(scale=a.mask_scale, fragments=a.fragments), seed=a.seed), a.seed,
                                        colour=not a.no_colour, progress=not a.quiet)
                 if a.live is not None:
                     for ev in progress_bar(buf.events, desc="publish", unit="msg", enabled=not a.quiet):
