@@ -22,6 +22,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shlex
 import signal
 import subprocess
 import sys
@@ -41,7 +42,7 @@ from .rig import smartroom
 def start_daemon(rig_path: Path, url: str, state: Path, mode: str):
     """Starts mvtrackd; returns the process and the monotonic time of its exec and ready line."""
     t_exec = time.monotonic()
-    p = subprocess.Popen([str(DAEMON), "--rig", str(rig_path), "--in", url, "--mode", mode, "--state", str(state)],
+    p = subprocess.Popen([str(DAEMON), "--rig", str(rig_path), "--in", url, "--mode", *shlex.split(mode), "--state", str(state)],
                          stderr=subprocess.PIPE, text=True)
     lines: list[str] = []
     ready = threading.Event()
@@ -235,7 +236,8 @@ def offline(seed: int, gap_s: float, at: float, seconds: float, out: Path, mode:
     for half in (a, b):
         o = half.with_suffix(".out.lcm")
         subprocess.run([str(DAEMON), "--rig", str(rig_path), "--in", f"file://{half}?speed=0", "--out",
-                        f"file://{o}?mode=w", "--mode", mode, "--state", str(state)], check=True, capture_output=True)
+                        f"file://{o}?mode=w", "--mode", *shlex.split(mode), "--state", str(state)], check=True,
+                       capture_output=True)
         tl = read_log(str(o), lambda c: c == "TRACKS").tracks
         msgs.append([_Tracks(u, tl[u]) for u in sorted(tl)])
     kept, last_before, _, reused, _, _ = score(msgs[0], msgs[1], people, frame_of_utime, f_restart)
@@ -253,7 +255,8 @@ def main(argv=None) -> int:
     ap.add_argument("--seconds", type=float, default=14.0, help="scene length, s (default 14)")
     ap.add_argument("--at", type=float, default=6.0, help="stop the daemon this far into the scene, s (default 6)")
     ap.add_argument("--down", type=float, default=1.0, help="restart it this long after, s (default 1)")
-    ap.add_argument("--mode", default="pkf", help="daemon --mode (default pkf)")
+    ap.add_argument("--mode", default="pkf", help="daemon --mode, and more daemon options after it if wanted "
+                    "(default pkf; e.g. 'pkf --lifecycle body')")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--port", type=int, default=7300 + os.getpid() % 200, help="private multicast port")
     ap.add_argument("--out", type=Path, default=REPO / "out" / "restart")
