@@ -1,0 +1,317 @@
+"""tools/mvtrack calibrate on boards rendered through known cameras (mvtrack_tools.board_render):
+the recovered cameras against the ones that rendered them, the checks that catch a bad rig, and the
+error paths (exit 2, one line, the rig file unchanged)."""
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from mvtrack_tools.board_render import pose_in_front, render
+from mvtrack_tools.calibrate import Board
+from mvtrack_tools.rig import Rig, intrinsics, look_at, smartroom
+
+REPO = Path(__file__).resolve().parents[2]
+
+# focal length (px), distortion k1 k2 p1 p2 k3, camera height (m) and where it looks
+CAMERAS = [
+    (420.0, (-0.28, 0.09, 0.0006, -0.0004, -0.012), 2.2, (2.0, 2.0, 0.0)),
+    (560.0, (-0.18, 0.03, -0.0003, 0.0005, 0.0), 2.6, (2.5, 1.5, 0.0)),
+    (700.0, (-0.08, 0.0, 0.0, 0.0, 0.0), 3.0, (1.5, 2.5, 0.0)),
+    (900.0, (0.04, -0.02, 0.0002, 0.0002, 0.0), 3.5, (2.0, 3.0, 0.0)),
+    (1200.0, (0.0, 0.0, 0.0, 0.0, 0.0), 2.8, (3.0, 2.0, 0.0)),
+]
+POSITIONS = [(0.2, 0.3), (4.0, 0.4), (0.3, 4.2), (4.3, 4.0), (2.2, -0.5)]
+
+
+def camera(i: int):
+    f, dist, h, tgt = CAMERAS[i]
+    K = intrinsics(f, f, 383.5 + 3 * i, 287.5 - 2 * i)
+    x, y = POSITIONS[i]
+    return look_at(f"cam{i}", [x, y, h], list(tgt), K, dist)
+
+
+def run(*args: str) -> subprocess.CompletedProcess:
+    env = dict(os.environ, PYTHONPATH=str(REPO / "tools"))
+    return subprocess.run([sys.executable, "-m", "mvtrack_tools.calibrate", *args], capture_output=True, text=True,
+                          env=env)
+
+
+def picture_error(true_cam, K: np.ndarray, dist: np.ndarray, hull: np.ndarray | None = None) -> float:
+    """Largest pixel distance over the picture between the true lens and the recovered one: the rays
+    of a 48 x 36 grid of the true camera's pixels (those inside hull, the views' corners, when given:
+    a lens model says nothing where no view showed it), projected by the recovered lens turned by the
+    small rotation that fits them best (a principal point error trades against the camera's pose,
+    which the extrinsics then absorb)."""
+    w, h = true_cam.width, true_cam.height
+    uu, vv = np.meshgrid(np.linspace(2, w - 3, 48), np.linspace(2, h - 3, 36))
+    pix = np.stack([uu.ravel(), vv.ravel()], axis=1)
+    if hull is not None:
+        hh = cv2.convexHull(hull.astype(np.float32))
+        pix = pix[[cv2.pointPolygonTest(hh, (float(x), float(y)), False) >= 0 for x, y in pix]]
+    pix = pix.reshape(-1, 1, 2)
+    xn = cv2.undistortPointsIter(pix, np.asarray(true_cam.K, float), np.asarray(true_cam.dist, float), None, None,
+                                 (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 50, 1e-12)).reshape(-1, 2)
+    X = np.hstack([xn, np.ones((len(xn), 1))]).astype(np.float64)
+    from scipy.optimize import least_squares
+
+    def res(r):
+        p, _ = cv2.projectPoints(X, r, np.zeros(3), K, dist)
+        return (p.reshape(-1, 2) - pix.reshape(-1, 2)).ravel()
+
+    r = least_squares(res, np.zeros(3)).x
+    return float(np.max(np.linalg.norm(res(r).reshape(-1, 2), axis=1)))
+
+
+def corners_of(board: Board, folder: Path) -> np.ndarray:
+    pts = []
+    for f in sorted(folder.glob("*.png")):
+        d = board.detect(cv2.imread(str(f), cv2.IMREAD_GRAYSCALE))
+        if d is not None:
+            pts.append(d[0])
+    return np.vstack(pts)
+
+
+def board_views(cam, board: Board, size_m, out: Path, rng) -> None:
+    """20 views: the board a third of the picture wide in every part of it up to the corners (where
+    the lens bends most), and half the picture wide tilted every way."""
+    small = size_m[0] * float(cam.K[0, 0]) / (0.28 * cam.width)
+    big = size_m[0] * float(cam.K[0, 0]) / (0.55 * cam.width)
+    poses = [(small, (x, y), (10 * np.sign(-y), 10 * np.sign(x), 0)) for x in (-0.72, 0.0, 0.72) for y in (-0.66, 0.0, 0.66)]
+    poses += [(small, (x, y), (0, 0, 0)) for x, y in ((-0.4, -0.66), (0.4, 0.66), (-0.72, 0.35), (0.72, -0.35))]
+    poses += [(big, (0, 0), (0, 0, 0)), (big, (-0.3, -0.3), (25, -20, 5)), (big, (0.3, -0.3), (-25, -20, -5)),
+              (big, (-0.3, 0.3), (25, 20, 0)), (big, (0.3, 0.3), (-25, 20, 10)), (big, (0, -0.3), (35, 0, 0)),
+              (big, (0, 0.3), (-35, 0, 0)), (big, (-0.3, 0), (0, 35, 0)), (big, (0.3, 0), (0, -35, 0)),
+              (big, (0, 0), (20, 20, 45)), (small, (0.62, -0.58), (0, 0, 30))]
+    for i, (dist, off, tilt) in enumerate(poses):
+        R_b, t_b = pose_in_front(cam, size_m, dist * (0.95 + 0.1 * rng.random()), off, tilt)
+        cv2.imwrite(str(out / f"view{i:02d}.png"), render(cam, board, R_b, t_b, rng))
+
+
+def test_intrinsics_five_cameras_recovered(tmp_path):
+    rng = np.random.default_rng(5)
+    board = Board("chessboard:9x6:0.05")
+    rows = []
+    for i in range(len(CAMERAS)):
+        cam = camera(i)
+        d = tmp_path / f"c{i}"
+        d.mkdir()
+        board_views(cam, board, (0.5, 0.35), d, rng)
+        rig = tmp_path / "rig.yaml"
+        r = run("intrinsics", "--rig", str(rig), "--camera", cam.name, "--images", str(d / "*.png"),
+                "--board", "chessboard:9x6:0.05")
+        assert r.returncode == 0, r.stderr
+        out = json.loads(r.stdout.strip().splitlines()[-1])
+        K = np.array(out["camera_matrix"])
+        dist = np.array(out["distortion"])
+        f_err = abs(K[0, 0] / cam.K[0, 0] - 1)
+        pp_err = float(np.hypot(K[0, 2] - cam.K[0, 2], K[1, 2] - cam.K[1, 2]))
+        hull = corners_of(board, d)
+        pic = picture_error(cam, K, dist, hull)
+        share = float(cv2.contourArea(cv2.convexHull(hull.astype(np.float32)))) / (cam.width * cam.height)
+        rows.append((cam.name, out["rms_px"], f_err, pp_err, pic, share))
+        written = Rig.read(rig)
+        assert any(c.name == cam.name for c in written.cameras)
+    print("\nintrinsics (camera, RMS px, focal error, principal point error px, largest error over the "
+          "views' hull px, the hull's share of the picture):")
+    for row in rows:
+        print("  %s  %.3f  %.4f  %.2f  %.3f  %.2f" % row)
+    for name, rms, f_err, pp_err, pic, share in rows:
+        assert f_err < 0.005, (name, f_err)
+        assert pp_err < 2.0, (name, pp_err)
+        assert pic < 0.3, (name, pic)
+    assert len(Rig.read(tmp_path / "rig.yaml").cameras) == len(CAMERAS)
+
+
+def test_intrinsics_charuco_rational_wide_lens(tmp_path):
+    rng = np.random.default_rng(9)
+    K = intrinsics(380.0, 380.0, 380.0, 290.0)
+    cam = look_at("wide", [0, 0, 2], [1, 1, 0], K, (0.3, -0.05, 0.0, 0.0, 0.0, 0.6, -0.1, 0.0))
+    board = Board("charuco:10x7:0.05:0.037")
+    board_views(cam, board, (0.5, 0.35), tmp_path, rng)
+    rig = tmp_path / "rig.yaml"
+    r = run("intrinsics", "--rig", str(rig), "--camera", "wide", "--images", str(tmp_path / "*.png"), "--board",
+            "charuco:10x7:0.05:0.037", "--rational")
+    assert r.returncode == 0, r.stderr
+    out = json.loads(r.stdout.strip().splitlines()[-1])
+    assert len(out["distortion"]) == 8
+    K2 = np.array(out["camera_matrix"])
+    pic = picture_error(cam, K2, np.array(out["distortion"]), corners_of(board, tmp_path))
+    print(f"\ncharuco, rational: RMS {out['rms_px']:.3f} px, focal error {abs(K2[0, 0] / 380 - 1):.4f}, picture {pic:.3f} px")
+    assert abs(K2[0, 0] / 380.0 - 1) < 0.005
+    assert pic < 0.3
+
+
+def write_true_rig(path: Path, cams) -> None:
+    """A rig with the cameras' true intrinsics and no pose yet (as intrinsics leaves it)."""
+    out = []
+    for c in cams:
+        c2 = look_at(c.name, [0, 0, 1], [0, 1, 1], c.K, c.dist)
+        c2.rvec, c2.tvec = np.zeros(3), np.zeros(3)
+        out.append(c2)
+    Rig(out, np.array([0.0, 0.0, 0.0]), np.array([5.0, 5.0, 2.5]), 25.0).write(path)
+
+
+def pose_errors(rig_path: Path, cam) -> tuple[float, float]:
+    c = next(x for x in Rig.read(rig_path).cameras if x.name == cam.name)
+    dpos = float(np.linalg.norm(c.centre - cam.centre))
+    dR = cv2.Rodrigues(c.R @ cam.R.T)[0]
+    return dpos, float(np.degrees(np.linalg.norm(dR)))
+
+
+def test_extrinsics_from_floor_board_and_from_points(tmp_path):
+    rng = np.random.default_rng(3)
+    board = Board("charuco:7x5:0.25:0.19")
+    cams = [camera(i) for i in range(len(CAMERAS))]
+    rig = tmp_path / "rig.yaml"
+    write_true_rig(rig, cams)
+    rows = []
+    for i, cam in enumerate(cams):
+        # each camera looks at the board, which lies on the floor and is the world frame (board
+        # point p is world point p)
+        a = np.radians(72 * i + 20)
+        centre = np.array([0.75, -0.5, 0.0])  # the board's middle
+        reach = 1.2 + 0.002 * float(cam.K[0, 0])  # a longer lens stands farther back
+        cam = look_at(cam.name, [centre[0] + reach * np.cos(a), centre[1] + reach * np.sin(a), CAMERAS[i][2]],
+                      list(centre), cam.K, cam.dist)
+        img = render(cam, board, np.diag([1.0, -1.0, -1.0]), np.zeros(3), rng)
+        png = tmp_path / f"{cam.name}_floor.png"
+        cv2.imwrite(str(png), img)
+        r = run("extrinsics", "--rig", str(rig), "--camera", cam.name, "--image", str(png), "--board",
+                "charuco:7x5:0.25:0.19")
+        assert r.returncode == 0, r.stderr
+        dpos_b, dang_b = pose_errors(rig, cam)
+        # world points: a 3 x 3 grid on the floor and four 1.5 m up, 0.3 px of detection noise
+        pts = [(x, y, 0.0) for x in (-0.5, 0.6, 1.7) for y in (-1.4, -0.45, 0.5)] + \
+              [(0.0, 0.0, 1.0), (1.2, 0.0, 1.0), (0.0, -1.2, 1.0), (1.2, -1.2, 1.0)]
+        X = np.array(pts)
+        uv = cam.project(X) + rng.normal(0, 0.3, (len(X), 2))
+        ok = cam.in_image(uv) & (cam.depth(X) > 0)
+        csv = tmp_path / f"{cam.name}.csv"
+        csv.write_text("u,v,x,y,z\n" + "".join(f"{u},{v},{x},{y},{z}\n" for (u, v), (x, y, z) in zip(uv[ok], X[ok])))
+        r = run("extrinsics", "--rig", str(rig), "--camera", cam.name, "--points", str(csv))
+        assert r.returncode == 0, r.stderr
+        dpos_p, dang_p = pose_errors(rig, cam)
+        rows.append((cam.name, dpos_b, dang_b, dpos_p, dang_p, int(ok.sum())))
+    print("\nextrinsics (camera, board: position error m, angle deg; points: m, deg, points):")
+    for row in rows:
+        print("  %s  %.4f %.3f  %.4f %.3f  %d" % row)
+    for name, dpb, dab, dpp, dap, _ in rows:
+        assert dpb < 0.02 and dab < 0.3, name
+        assert dpp < 0.02 and dap < 0.3, name
+
+
+def test_check_flags_under_floor_mirrored_and_alone(tmp_path):
+    room = smartroom()
+    rig = tmp_path / "rig.yaml"
+    room.write(rig)
+    r = run("check", "--rig", str(rig), "--plot", str(tmp_path / "check.png"))
+    assert r.returncode == 0, r.stderr
+    out = json.loads(r.stdout.strip().splitlines()[-1])
+    assert out["problems"] == [] and out["floor_seen_by_2"] > 0.8
+    assert all(1.5 < c["height_m"] < 4 for c in out["cameras"])
+    assert (tmp_path / "check.png").stat().st_size > 10000
+    K = room.cameras[0].K
+    under = look_at("under", [2.0, 2.0, -0.5], [2.5, 2.5, -1.0], K, (0, 0, 0, 0, 0))
+    up = look_at("up", [1.0, 1.0, 2.5], [1.5, 1.5, 4.0], K, (0, 0, 0, 0, 0))
+    alone = look_at("alone", [-3.0, -3.0, 2.5], [-6.0, -6.0, 0.0], K, (0, 0, 0, 0, 0))
+    for bad, words in ((under, "under the floor"), (up, "looks away from the floor"), (alone, "no other camera overlaps")):
+        rig2 = tmp_path / f"{bad.name}.yaml"
+        Rig(room.cameras + [bad], room.volume_min, room.volume_max, room.frame_rate).write(rig2)
+        r = run("check", "--rig", str(rig2))
+        assert r.returncode == 0, r.stderr
+        problems = json.loads(r.stdout.strip().splitlines()[-1])["problems"]
+        assert any(p.startswith(bad.name) and words in p for p in problems), problems
+
+
+@pytest.mark.daemon
+def test_check_log_finds_a_knocked_camera(tmp_path, daemon_path):
+    env = dict(os.environ, PYTHONPATH=str(REPO / "tools"))
+    rig = tmp_path / "rig.yaml"
+    log = tmp_path / "crowd.lcm"
+    subprocess.run([sys.executable, "-m", "mvtrack_tools.simulate", "crowd", "--seconds", "20", "--seed", "3", "--rig",
+                    str(rig), "--log", str(log), "--quiet", "--dropout-cam", "-1"], check=True, env=env)
+    good = Rig.read(rig)
+    results = {}
+    for name, change in (("none", None), ("5cm", ("t", 0.05)), ("2deg", ("r", 2.0))):
+        cams = [look_at(c.name, [0, 0, 1], [0, 1, 1], c.K, c.dist) for c in good.cameras]
+        for c, g in zip(cams, good.cameras):
+            c.rvec, c.tvec, c.sigma_px = np.array(g.rvec, float), np.array(g.tvec, float), g.sigma_px
+        if change is not None:
+            c = cams[2]
+            if change[0] == "t":  # the camera moved 5 cm sideways in its own frame
+                c.tvec = c.tvec + np.array([change[1], 0.0, 0.0])
+            else:  # turned 2 degrees about its vertical
+                dR = cv2.Rodrigues(np.array([0.0, np.radians(change[1]), 0.0]))[0]
+                c.rvec = cv2.Rodrigues(dR @ cv2.Rodrigues(c.rvec)[0])[0].ravel()
+                c.tvec = dR @ c.tvec
+        bad = tmp_path / f"rig_{name}.yaml"
+        Rig(cams, good.volume_min, good.volume_max, good.frame_rate).write(bad)
+        trk = tmp_path / f"tracks_{name}.lcm"
+        subprocess.run([str(daemon_path), "--rig", str(bad), "--in", f"file://{log}?speed=0", "--out",
+                        f"file://{trk}?mode=w"], check=True, capture_output=True)
+        r = run("check", "--rig", str(bad), "--log", str(log), "--tracks", str(trk))
+        assert r.returncode == 0, r.stderr
+        results[name] = json.loads(r.stdout.strip().splitlines()[-1])["consistency"]
+    print("\nconsistency, per camera median of its pairs' mean ray gap (m):")
+    for name, cons in results.items():
+        print(f"  {name}: " + ", ".join(f"{k} {v:.3f}" for k, v in cons["per_camera_m"].items()) +
+              f"; flagged {cons['inconsistent']}")
+    assert results["none"]["inconsistent"] == []
+    assert results["5cm"]["inconsistent"] == [good.cameras[2].name]
+    assert results["2deg"]["inconsistent"] == [good.cameras[2].name]
+
+
+def test_errors_exit_2_and_leave_the_rig(tmp_path):
+    room = smartroom()
+    rig = tmp_path / "rig.yaml"
+    room.write(rig)
+    before = rig.read_bytes()
+    blank = tmp_path / "blank"
+    blank.mkdir()
+    for i in range(3):
+        cv2.imwrite(str(blank / f"b{i}.png"), np.full((576, 768), 128, np.uint8))
+    cam = room.cameras[0]
+    line = lambda pts: "u,v,x,y,z\n" + "".join(f"{u},{v},{x},{y},{z}\n" for u, v, x, y, z in pts)  # noqa: E731
+    collinear = tmp_path / "collinear.csv"
+    X = np.array([[x, 1.0, 0.0] for x in np.linspace(0.5, 4.5, 6)])
+    collinear.write_text(line([(u, v, *p) for (u, v), p in zip(cam.project(X), X)]))
+    corner = tmp_path / "corner.csv"
+    corner.write_text(line([(10 + i, 10 + (i % 2), x, y, 0.0) for i, (x, y) in enumerate([(0, 0), (1, 0), (0, 1), (1, 1), (2, 2)])]))
+    header = tmp_path / "header.csv"
+    header.write_text("x,y,z,u,v\n1,2,3,4,5\n")
+    # points a camera under the floor sees: the solution puts it there
+    below = look_at("below", [2.0, 2.0, -2.5], [2.5, 2.5, 0.5], cam.K, cam.dist)
+    Xs = np.array([[x, y, z] for x in (1.0, 3.0) for y in (1.0, 3.0) for z in (0.0, 1.5)])
+    under = tmp_path / "under.csv"
+    under.write_text(line([(u, v, x, y, z) for (u, v), (x, y, z) in zip(below.project(Xs), Xs)]))
+    mispaired = tmp_path / "mispaired.csv"
+    uvs = cam.project(Xs)
+    mispaired.write_text(line([(u, v, x, y, z) for (u, v), (x, y, z) in zip(uvs[::-1], Xs)]))
+    cases = [
+        (["intrinsics", "--rig", str(rig), "--camera", "cam0", "--images", str(blank / "*.png"), "--board",
+          "chessboard:9x6:0.05"], "no board found"),
+        (["intrinsics", "--rig", str(rig), "--camera", "cam0", "--images", str(tmp_path / "none*.png"), "--board",
+          "chessboard:9x6:0.05"], "no image matches"),
+        (["intrinsics", "--rig", str(rig), "--camera", "cam0", "--images", str(blank / "*.png"), "--board",
+          "chessboard:9:0.05"], "bad --board"),
+        (["extrinsics", "--rig", str(rig), "--camera", "cam0", "--points", str(collinear)], "collinear"),
+        (["extrinsics", "--rig", str(rig), "--camera", "cam0", "--points", str(corner)], "one corner"),
+        (["extrinsics", "--rig", str(rig), "--camera", "cam0", "--points", str(header)], "u,v,x,y,z"),
+        (["extrinsics", "--rig", str(rig), "--camera", "cam0", "--points", str(under)], "under the floor"),
+        (["extrinsics", "--rig", str(rig), "--camera", "cam0", "--points", str(mispaired)], "fit no pose"),
+        (["extrinsics", "--rig", str(rig), "--camera", "nobody", "--points", str(collinear)], "not in the rig"),
+        (["check", "--rig", str(tmp_path / "missing.yaml")], "no such rig file"),
+    ]
+    for args, words in cases:
+        r = run(*args)
+        assert r.returncode == 2, (args, r.stderr)
+        assert words in r.stderr and len(r.stderr.strip().splitlines()) == 1, (args, r.stderr)
+        assert r.stdout == ""
+        assert rig.read_bytes() == before, args

@@ -1,0 +1,590 @@
+"""Calibration: a camera's lens from a board, its place in the room from world points or a board on
+the floor, and the checks that catch a bad rig. Writes the rig file of CONTRACT section 2.
+
+    tools/mvtrack calibrate intrinsics --rig RIG.yaml --camera NAME (--images GLOB | --video FILE)
+                                       --board chessboard:COLSxROWS:SQUARE_M [--rational]
+    tools/mvtrack calibrate extrinsics --rig RIG.yaml --camera NAME --points POINTS.csv
+    tools/mvtrack calibrate extrinsics --rig RIG.yaml --camera NAME --image FLOOR.png
+                                       --board charuco:COLSxROWS:SQUARE_M:MARKER_M[:DICT]
+    tools/mvtrack calibrate check --rig RIG.yaml [--plot FILE.png] [--log LOG.lcm]
+
+Boards: chessboard:COLSxROWS:SQUARE_M counts inner corners; charuco:COLSxROWS:SQUARE_M:MARKER_M[:DICT]
+counts squares (DICT an OpenCV ArUco dictionary name, default DICT_4X4_50). A ChArUco board lying
+face up on the floor defines the world frame (metres, z up, its first inner corner the origin, x
+along its columns, y the other way from its rows); a chessboard is ambiguous by 180 degrees
+there, so only ChArUco is accepted for extrinsics.
+
+intrinsics: frames where the board is found are kept unless blurred (the variance of the
+Laplacian over the board under a third of the median's); of those, up to --max-views are chosen
+for coverage of the picture (a 4 x 4 grid) and of tilts (the board's normal in 30-degree bins).
+OpenCV's model with 5 coefficients (8 with --rational). Prints the RMS, each view's error, and the
+picture's cells no view covered.
+
+extrinsics: cv2.solvePnP (SQPNP) refined by Levenberg-Marquardt. Prints the reprojection error in
+pixels and, for points on the floor (z = 0), the error in metres on the floor.
+
+check: per camera its height, where it looks, whether it is under the floor or looks away from it;
+the floor's coverage at head height (1.7 m) by two cameras or more; each pair's overlap; with
+--log (DETECTIONS_ and TRACKS of a recording, or --tracks from mvtrackd's output), each pair of
+cameras' mean gap between their rays at the heads of the tracks both saw: a camera whose gaps to
+every other are larger than the rest's (twice, and by 1 cm) is flagged (knocked, or a wrong entry).
+
+Every command ends with one JSON line on standard output. Bad input (no board, too few or
+degenerate points, a camera under the floor, points behind it): exit 2 with one line on standard
+error; the rig file is never left half written (written to a temporary file and renamed).
+"""
+from __future__ import annotations
+
+import argparse
+import glob
+import json
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from .rig import Camera, Rig
+
+HEAD_M = 1.7
+
+
+class CalibError(Exception):
+    """Bad input: one line for the user, exit 2."""
+
+
+# ---- boards -------------------------------------------------------------------------------------
+
+class Board:
+    def __init__(self, spec: str):
+        parts = spec.split(":")
+        try:
+            kind = parts[0]
+            cols, rows = (int(v) for v in parts[1].lower().split("x"))
+            self.square = float(parts[2])
+            if kind == "chessboard" and len(parts) == 3:
+                self.kind, self.cols, self.rows = kind, cols, rows
+            elif kind == "charuco" and len(parts) in (4, 5):
+                self.kind, self.cols, self.rows = kind, cols, rows
+                self.marker = float(parts[3])
+                name = parts[4] if len(parts) == 5 else "DICT_4X4_50"
+                self.dictionary = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, name))
+                self.board = cv2.aruco.CharucoBoard((cols, rows), self.square, self.marker, self.dictionary)
+                self.detector = cv2.aruco.CharucoDetector(self.board)
+            else:
+                raise ValueError
+        except (ValueError, IndexError, AttributeError, cv2.error):
+            raise CalibError(f"bad --board '{spec}': chessboard:COLSxROWS:SQUARE_M or "
+                             "charuco:COLSxROWS:SQUARE_M:MARKER_M[:DICT]") from None
+        if cols < 2 or rows < 2 or not (self.square > 0):
+            raise CalibError(f"bad --board '{spec}': at least 2 x 2 and a positive square")
+
+    def object_points(self) -> np.ndarray:
+        """Every corner of the board in its own frame (z = 0), metres."""
+        if self.kind == "chessboard":
+            g = np.mgrid[0:self.cols, 0:self.rows].T.reshape(-1, 2)
+            return np.hstack([g * self.square, np.zeros((len(g), 1))]).astype(np.float32)
+        return self.board.getChessboardCorners().astype(np.float32)
+
+    def detect(self, gray: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """(image points N x 2, object points N x 3) of the corners found, or None."""
+        if self.kind == "chessboard":
+            ok, corners = cv2.findChessboardCornersSB(gray, (self.cols, self.rows), flags=cv2.CALIB_CB_ACCURACY)
+            if not ok:
+                return None
+            return corners.reshape(-1, 2).astype(np.float32), self.object_points()
+        corners, ids, _, _ = self.detector.detectBoard(gray)
+        if ids is None or len(ids) < 6:
+            return None
+        obj = self.object_points()[ids.ravel()]
+        return corners.reshape(-1, 2).astype(np.float32), obj
+
+
+# ---- rig file -------------------------------------------------------------------------------------
+
+def load_rig(path: Path, must_exist: bool) -> Rig | None:
+    if not path.exists():
+        if must_exist:
+            raise CalibError(f"{path}: no such rig file")
+        return None
+    try:
+        return Rig.read(path)
+    except Exception as e:  # noqa: BLE001 - any unreadable file is the user's input
+        raise CalibError(f"{path}: not a rig file ({e.__class__.__name__})") from None
+
+
+def save_rig(rig: Rig, path: Path) -> None:
+    """Atomically: a temporary file beside it, then a rename; the old file stays whole on failure."""
+    fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp.yaml", dir=str(path.parent.resolve()))
+    os.close(fd)
+    try:
+        rig.write(tmp)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+
+
+def find_camera(rig: Rig, name: str) -> int:
+    for i, c in enumerate(rig.cameras):
+        if c.name == name:
+            return i
+    raise CalibError(f"camera '{name}' is not in the rig")
+
+
+# ---- intrinsics ---------------------------------------------------------------------------------
+
+def read_frames(images: str | None, video: str | None, every: int) -> list[np.ndarray]:
+    frames = []
+    if images:
+        paths = sorted(glob.glob(images))
+        if not paths:
+            raise CalibError(f"no image matches '{images}'")
+        for p in paths:
+            img = cv2.imread(p, cv2.IMREAD_GRAYSCALE)
+            if img is None:
+                raise CalibError(f"{p}: not an image")
+            frames.append(img)
+    else:
+        cap = cv2.VideoCapture(video)
+        if not cap.isOpened():
+            raise CalibError(f"{video}: cannot open the video")
+        i = 0
+        while True:
+            ok, img = cap.read()
+            if not ok:
+                break
+            if i % every == 0:
+                frames.append(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY))
+            i += 1
+        if not frames:
+            raise CalibError(f"{video}: no frame")
+    shapes = {f.shape for f in frames}
+    if len(shapes) != 1:
+        raise CalibError("the images are not all the same size")
+    return frames
+
+
+def sharpness(gray: np.ndarray, pts: np.ndarray) -> float:
+    x0, y0 = np.maximum(pts.min(axis=0).astype(int), 0)
+    x1, y1 = pts.max(axis=0).astype(int) + 1
+    roi = gray[y0:y1, x0:x1]
+    return float(cv2.Laplacian(roi, cv2.CV_64F).var()) if roi.size else 0.0
+
+
+def choose_views(views: list[dict], width: int, height: int, max_views: int) -> list[dict]:
+    """Greedy: each next view adds the most picture cells (4 x 4) and tilt bins not yet covered."""
+    def cells(v):
+        c = set()
+        for x, y in v["img"]:
+            c.add((min(int(4 * x / width), 3), min(int(4 * y / height), 3)))
+        return c
+    for v in views:
+        v["cells"] = cells(v)
+        H, _ = cv2.findHomography(v["obj"][:, :2], v["img"])
+        # the board's tilt: the angle of its normal estimated from the homography's columns
+        h1, h2 = H[:, 0], H[:, 1]
+        n = np.cross(h1 / np.linalg.norm(h1), h2 / np.linalg.norm(h2))
+        v["tilt"] = (int(np.degrees(np.arctan2(n[0], n[2])) // 30), int(np.degrees(np.arctan2(n[1], n[2])) // 30))
+    chosen: list[dict] = []
+    got_cells: set = set()
+    got_tilts: set = set()
+    rest = list(views)
+    while rest and len(chosen) < max_views:
+        best = max(rest, key=lambda v: (len(v["cells"] - got_cells) + 2 * (v["tilt"] not in got_tilts), len(v["img"])))
+        chosen.append(best)
+        got_cells |= best["cells"]
+        got_tilts.add(best["tilt"])
+        rest.remove(best)
+    return chosen
+
+
+def intrinsics(a) -> dict:
+    board = Board(a.board)
+    rig_path = Path(a.rig)
+    rig = load_rig(rig_path, must_exist=False)
+    frames = read_frames(a.images, a.video, a.every)
+    h, w = frames[0].shape
+    found = []
+    for i, f in enumerate(frames):
+        d = board.detect(f)
+        if d is not None:
+            found.append({"index": i, "img": d[0], "obj": d[1], "sharp": sharpness(f, d[0])})
+    if not found:
+        raise CalibError("no board found in any image")
+    med = float(np.median([v["sharp"] for v in found]))
+    sharp = [v for v in found if v["sharp"] >= med / 3.0]
+    views = choose_views(sharp, w, h, a.max_views)
+    if len(views) < 3:
+        raise CalibError(f"too few views of the board: {len(views)} (3 or more, from different angles)")
+    flags = cv2.CALIB_RATIONAL_MODEL if a.rational else 0
+    rms, K, dist, rvecs, tvecs = cv2.calibrateCamera([v["obj"] for v in views], [v["img"] for v in views], (w, h),
+                                                     None, None, flags=flags)
+    per_view = []
+    for v, r, t in zip(views, rvecs, tvecs):
+        p, _ = cv2.projectPoints(v["obj"], r, t, K, dist)
+        per_view.append(float(np.sqrt(np.mean(np.sum((p.reshape(-1, 2) - v["img"]) ** 2, axis=1)))))
+    covered = set().union(*(v["cells"] for v in views))
+    missing = sorted({(i, j) for i in range(4) for j in range(4)} - covered)
+    n_dist = 8 if a.rational else 5
+    cam = Camera(a.camera, K, dist.ravel()[:n_dist], np.zeros(3), np.zeros(3), w, h, 2.0)
+    if rig is None:
+        rig = Rig([cam], np.array([-5.0, -5.0, 0.0]), np.array([5.0, 5.0, 2.5]), 25.0)
+    else:
+        try:
+            i = find_camera(rig, a.camera)
+            old = rig.cameras[i]
+            cam.rvec, cam.tvec, cam.sigma_px = old.rvec, old.tvec, old.sigma_px
+            rig.cameras[i] = cam
+        except CalibError:
+            rig.cameras.append(cam)
+    save_rig(rig, rig_path)
+    print(f"{a.camera}: {len(found)} of {len(frames)} images show the board, {len(found) - len(sharp)} blurred, "
+          f"{len(views)} used; RMS {rms:.3f} px; fx {K[0, 0]:.1f} fy {K[1, 1]:.1f} cx {K[0, 2]:.1f} cy {K[1, 2]:.1f}",
+          file=sys.stderr)
+    for v, e in zip(views, per_view):
+        print(f"  view {v['index']}: {e:.3f} px", file=sys.stderr)
+    if missing:
+        print("  picture cells (column, row of a 4 x 4 grid) no view covered: " +
+              " ".join(f"({i},{j})" for i, j in missing), file=sys.stderr)
+    return {"camera": a.camera, "rms_px": float(rms), "views": len(views), "per_view_px": per_view,
+            "camera_matrix": K.tolist(), "distortion": dist.ravel()[:n_dist].tolist(),
+            "uncovered_cells": [list(c) for c in missing]}
+
+
+# ---- extrinsics ---------------------------------------------------------------------------------
+
+def read_points(path: str) -> tuple[np.ndarray, np.ndarray]:
+    try:
+        with open(path) as f:
+            header = f.readline().strip().replace(" ", "")
+            if header != "u,v,x,y,z":
+                raise CalibError(f"{path}: the first line must be u,v,x,y,z")
+            rows = [[float(x) for x in line.split(",")] for line in f if line.strip()]
+    except OSError as e:
+        raise CalibError(f"{path}: {e.strerror}") from None
+    except ValueError:
+        raise CalibError(f"{path}: every line needs five numbers u,v,x,y,z") from None
+    a = np.array(rows, float).reshape(-1, 5)
+    if not np.all(np.isfinite(a)):
+        raise CalibError(f"{path}: a value is not a finite number")
+    return a[:, :2].astype(np.float64), a[:, 2:].astype(np.float64)
+
+
+def check_points(img: np.ndarray, obj: np.ndarray, width: int, height: int) -> None:
+    if len(obj) < 4:
+        raise CalibError(f"too few points: {len(obj)} (4 or more)")
+    c = obj - obj.mean(axis=0)
+    s = np.linalg.svd(c, compute_uv=False)
+    if s[1] < 1e-3 * max(s[0], 1e-9):
+        raise CalibError("the world points are collinear (degenerate)")
+    span = (img.max(axis=0) - img.min(axis=0)) / np.array([width, height])
+    if span[0] * span[1] < 0.02:
+        raise CalibError("the points cover under 2 % of the picture (all in one corner): spread them out")
+
+
+def pose(img: np.ndarray, obj: np.ndarray, cam: Camera) -> tuple[np.ndarray, np.ndarray]:
+    K, dist = np.asarray(cam.K, float), np.asarray(cam.dist, float)
+    ok, r, t = cv2.solvePnP(obj, img, K, dist, flags=cv2.SOLVEPNP_SQPNP)
+    if not ok:
+        raise CalibError("no pose fits the points")
+    r, t = cv2.solvePnPRefineLM(obj, img, K, dist, r, t)
+    R = cv2.Rodrigues(r)[0]
+    centre = -R.T @ t.ravel()
+    if centre[2] <= 0:
+        raise CalibError(f"the solution puts the camera under the floor (z = {centre[2]:.2f} m): check the points")
+    depth = (obj @ R.T + t.ravel())[:, 2]
+    if np.any(depth <= 0):
+        raise CalibError("the solution puts points behind the camera: check the points")
+    return r.ravel(), t.ravel()
+
+
+def floor_error(img: np.ndarray, obj: np.ndarray, cam: Camera, r: np.ndarray, t: np.ndarray) -> float | None:
+    """Median distance on the floor between the floor points and their pixels cast onto z = 0, m."""
+    on = np.abs(obj[:, 2]) < 1e-6
+    if not on.any():
+        return None
+    xn = cv2.undistortPoints(img[on].reshape(-1, 1, 2), np.asarray(cam.K, float), np.asarray(cam.dist, float)).reshape(-1, 2)
+    R = cv2.Rodrigues(r)[0]
+    C = -R.T @ t
+    d = (np.hstack([xn, np.ones((len(xn), 1))]) @ R)  # rays in the world: R^T [x y 1]
+    lam = -C[2] / d[:, 2]
+    hit = C + lam[:, None] * d
+    return float(np.median(np.linalg.norm(hit[:, :2] - obj[on, :2], axis=1)))
+
+
+def extrinsics(a) -> dict:
+    rig_path = Path(a.rig)
+    rig = load_rig(rig_path, must_exist=True)
+    i = find_camera(rig, a.camera)
+    cam = rig.cameras[i]
+    if a.points:
+        img, obj = read_points(a.points)
+    else:
+        if not a.image or not a.board:
+            raise CalibError("extrinsics needs --points CSV, or --image with --board charuco:...")
+        board = Board(a.board)
+        if board.kind != "charuco":
+            raise CalibError("a chessboard on the floor is ambiguous by 180 degrees: use a charuco board")
+        gray = cv2.imread(a.image, cv2.IMREAD_GRAYSCALE)
+        if gray is None:
+            raise CalibError(f"{a.image}: not an image")
+        d = board.detect(gray)
+        if d is None:
+            raise CalibError(f"{a.image}: no board found")
+        # the board's own frame has z into the board (OpenCV's): lying face up on the floor, the
+        # world (z up) is that frame turned half a turn about its x axis
+        img, obj = d[0].astype(np.float64), d[1].astype(np.float64) * np.array([1.0, -1.0, -1.0])
+    check_points(img, obj, cam.width, cam.height)
+    r, t = pose(img, obj, cam)
+    p, _ = cv2.projectPoints(obj, r, t, np.asarray(cam.K, float), np.asarray(cam.dist, float))
+    err = np.linalg.norm(p.reshape(-1, 2) - img, axis=1)
+    rms = float(np.sqrt(np.mean(err ** 2)))
+    if rms > a.max_rms_px:
+        raise CalibError(f"the points fit no pose of this camera (reprojection RMS {rms:.1f} px over "
+                         f"{a.max_rms_px:g}): check their pairing and the camera's intrinsics")
+    fe = floor_error(img, obj, cam, r, t)
+    cam.rvec, cam.tvec = r, t
+    save_rig(rig, rig_path)
+    R = cv2.Rodrigues(r)[0]
+    C = -R.T @ t
+    print(f"{a.camera}: {len(obj)} points, reprojection RMS {rms:.3f} px (max {err.max():.2f} px)"
+          + (f", on the floor {100 * fe:.1f} cm (median)" if fe is not None else "")
+          + f"; camera at ({C[0]:.2f}, {C[1]:.2f}, {C[2]:.2f}) m", file=sys.stderr)
+    return {"camera": a.camera, "rms_px": rms, "max_px": float(err.max()), "floor_error_m": fe,
+            "position_m": C.tolist(), "points": int(len(obj))}
+
+
+# ---- check ----------------------------------------------------------------------------------------
+
+def sees(cam: Camera, X: np.ndarray) -> np.ndarray:
+    front = cam.depth(X) > 0.1
+    uv = cam.project(X)
+    return front & cam.in_image(uv) & np.all(np.isfinite(uv), axis=1)
+
+
+def ray(cam: Camera, uv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    xn = cv2.undistortPoints(np.asarray(uv, float).reshape(-1, 1, 2), np.asarray(cam.K, float),
+                             np.asarray(cam.dist, float)).reshape(-1, 2)
+    d = np.hstack([xn, np.ones((len(xn), 1))]) @ cam.R
+    return cam.centre, d / np.linalg.norm(d, axis=1, keepdims=True)
+
+
+def ray_gap(c1, d1, c2, d2) -> np.ndarray:
+    """The vector from the second ray's point nearest the first to the first's nearest the second (unit
+    directions): its length is the rays' distance, its mean over many heads a pair's bias."""
+    w0 = c1 - c2
+    b, d, e = float(d1 @ d2), float(d1 @ w0), float(d2 @ w0)
+    den = 1.0 - b * b
+    if den < 1e-12:
+        return np.cross(np.cross(d1, w0), d1)
+    s = (b * e - d) / den
+    t = (e - b * d) / den
+    return (c1 + s * d1) - (c2 + t * d2)
+
+
+def consistency(rig: Rig, log: str, tracks_log: str | None = None) -> dict:
+    """Per pair of cameras, the bias of their rays at the heads of the tracks both updated (each
+    camera's detection nearest the track's head): the length of the mean gap between the rays. A
+    camera whose pairs are all biased more than the others' is flagged."""
+    from .lcmio import read_log
+    from .paths import import_types
+    import lcm
+
+    mt = import_types()
+    names = [c.name for c in rig.cameras]
+    per_cam: dict[str, dict[int, list]] = {n: {} for n in names}
+    for ev in lcm.EventLog(log, "r"):
+        if ev.channel.startswith("DETECTIONS_"):
+            m = mt.camera_frame_t.decode(ev.data)
+            if m.camera in per_cam:
+                per_cam[m.camera][int(m.utime)] = [(d.u, d.v) for d in m.detections]
+    times = {n: np.array(sorted(v), dtype=np.int64) for n, v in per_cam.items()}
+    half_us = int(0.5e6 / rig.frame_rate)
+    tl = read_log(tracks_log or log, lambda c: c == "TRACKS").tracks
+    pairs: dict[tuple[int, int], list[float]] = {}
+    for u in sorted(tl):
+        frame = {}  # each camera's message of this frame set: the one nearest in time
+        for n in names:
+            ts = times[n]
+            if len(ts):
+                j = int(np.argmin(np.abs(ts - u)))
+                if abs(int(ts[j]) - u) <= half_us:
+                    frame[n] = per_cam[n][int(ts[j])]
+        for t in tl[u]:
+            used = [k for k in range(len(names)) if (t.cameras_used >> k) & 1 and names[k] in frame]
+            if len(used) < 2:
+                continue
+            X = np.array(t.position, float)[None]
+            pick = {}
+            for k in used:
+                cam = rig.cameras[k]
+                if not len(frame[names[k]]):
+                    continue
+                uv = cam.project(X)[0]
+                cand = np.array(frame[names[k]], float)
+                i = int(np.argmin(np.linalg.norm(cand - uv, axis=1)))
+                if np.linalg.norm(cand[i] - uv) < 30:
+                    pick[k] = cand[i]
+            ks = sorted(pick)
+            for a_ in range(len(ks)):
+                for b_ in range(a_ + 1, len(ks)):
+                    ca, da = ray(rig.cameras[ks[a_]], pick[ks[a_]])
+                    cb, db = ray(rig.cameras[ks[b_]], pick[ks[b_]])
+                    pairs.setdefault((ks[a_], ks[b_]), []).append(ray_gap(ca, da[0], cb, db[0]))
+    # a pair's bias: the length of its rays' mean gap (the noise of single heads averages out; a
+    # camera off by a few centimetres or a degree keeps its gap to every other camera the same way)
+    med = {p: float(np.linalg.norm(np.mean(v, axis=0))) for p, v in pairs.items() if len(v) >= 30}
+    per_cam = {}
+    for k in range(len(names)):
+        vals = [v for (a_, b_), v in med.items() if k in (a_, b_)]
+        if vals:
+            per_cam[k] = float(np.median(vals))
+    flagged = []
+    if len(per_cam) >= 3:
+        base = float(np.median(list(per_cam.values())))
+        for k, v in per_cam.items():
+            # a knocked camera: its rays miss every other camera's by more than the rest do
+            others = [w for (a_, b_), w in med.items() if k not in (a_, b_)]
+            ref = float(np.median(others)) if others else base
+            if v > max(2.0 * ref, ref + 0.01):
+                flagged.append(names[k])
+    return {"pairs": {f"{names[a_]}-{names[b_]}": v for (a_, b_), v in med.items()},
+            "per_camera_m": {names[k]: v for k, v in per_cam.items()}, "inconsistent": flagged}
+
+
+def check(a) -> dict:
+    rig = load_rig(Path(a.rig), must_exist=True)
+    lo, hi = np.asarray(rig.volume_min, float), np.asarray(rig.volume_max, float)
+    xs = np.linspace(lo[0], hi[0], 41)
+    ys = np.linspace(lo[1], hi[1], 41)
+    gx, gy = np.meshgrid(xs, ys)
+    grid = np.stack([gx.ravel(), gy.ravel(), np.full(gx.size, HEAD_M)], axis=1)
+    seen = np.array([sees(c, grid) for c in rig.cameras])
+    n_seen = seen.sum(axis=0)
+    cams, problems = [], []
+    for k, c in enumerate(rig.cameras):
+        C = c.centre
+        axis = c.R[2]  # the optical axis in the world
+        floor_pt = None
+        if axis[2] < 0:
+            lam = -C[2] / axis[2]
+            floor_pt = (C + lam * axis)[:2].tolist()
+        overlap = [rig.cameras[j].name for j in range(len(rig.cameras)) if j != k and (seen[k] & seen[j]).any()]
+        flags = []
+        if C[2] <= 0:
+            flags.append("under the floor")
+        elif axis[2] >= 0:
+            flags.append("looks away from the floor (mirrored or upside down)")
+        if not overlap and len(rig.cameras) > 1:
+            flags.append("no other camera overlaps it")
+        if not seen[k].any():
+            flags.append("sees no head-height point of the volume")
+        problems += [f"{c.name}: {f}" for f in flags]
+        cams.append({"name": c.name, "height_m": float(C[2]), "position_m": C.tolist(),
+                     "looks_down_deg": float(np.degrees(np.arcsin(np.clip(-axis[2], -1, 1)))),
+                     "looks_at_floor_m": floor_pt, "overlaps": overlap, "flags": flags,
+                     "floor_seen_share": float(seen[k].mean())})
+        print(f"{c.name}: {C[2]:.2f} m above the floor at ({C[0]:.2f}, {C[1]:.2f}), looking "
+              f"{cams[-1]['looks_down_deg']:.0f} deg down" + (f" at ({floor_pt[0]:.2f}, {floor_pt[1]:.2f})" if floor_pt else "")
+              + f"; sees {100 * seen[k].mean():.0f} % of the floor at {HEAD_M} m"
+              + ("; " + "; ".join(flags) if flags else ""), file=sys.stderr)
+    share2 = float((n_seen >= 2).mean())
+    print(f"floor at head height seen by two cameras or more: {100 * share2:.0f} %", file=sys.stderr)
+    out = {"cameras": cams, "floor_seen_by_2": share2, "problems": problems}
+    if a.log:
+        cons = consistency(rig, a.log, a.tracks)
+        out["consistency"] = cons
+        for name in cons["inconsistent"]:
+            out["problems"].append(f"{name}: its rays miss the other cameras' at the same heads (knocked, or a wrong entry)")
+        for k, v in cons["per_camera_m"].items():
+            print(f"{k}: its rays pass {100 * v:.1f} cm from the other cameras' at the same heads, on average "
+                  "(median over its pairs)", file=sys.stderr)
+    for p in out["problems"]:
+        print(f"PROBLEM {p}", file=sys.stderr)
+    if a.plot:
+        plot(rig, grid, n_seen, seen, a.plot)
+    return out
+
+
+def plot(rig: Rig, grid: np.ndarray, n_seen: np.ndarray, seen: np.ndarray, path: str) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    lo, hi = np.asarray(rig.volume_min, float), np.asarray(rig.volume_max, float)
+    fig, ax = plt.subplots(figsize=(7, 6))
+    n = int(np.sqrt(len(grid)))
+    im = ax.imshow(n_seen.reshape(n, n), origin="lower", extent=(lo[0], hi[0], lo[1], hi[1]), cmap="viridis",
+                   vmin=0, vmax=max(2, len(rig.cameras)))
+    fig.colorbar(im, ax=ax, label=f"cameras that see a head at {HEAD_M} m")
+    ax.contour(grid[:, 0].reshape(n, n), grid[:, 1].reshape(n, n), (n_seen >= 2).reshape(n, n).astype(float),
+               levels=[0.5], colors="white", linewidths=1)
+    for c in rig.cameras:
+        C = c.centre
+        a = c.R[2]
+        ax.plot(C[0], C[1], "r^", ms=9)
+        ax.annotate(c.name, (C[0], C[1]), color="red", xytext=(4, 4), textcoords="offset points")
+        ax.arrow(C[0], C[1], 0.8 * a[0], 0.8 * a[1], color="red", head_width=0.12, length_includes_head=True)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.set_title("floor plan: cameras, and how many see each place at head height\n"
+                 "(white line: seen by two or more)")
+    ax.set_aspect("equal")
+    ax.set_xlim(min(lo[0], min(c.centre[0] for c in rig.cameras)) - 0.5, max(hi[0], max(c.centre[0] for c in rig.cameras)) + 0.5)
+    ax.set_ylim(min(lo[1], min(c.centre[1] for c in rig.cameras)) - 0.5, max(hi[1], max(c.centre[1] for c in rig.cameras)) + 0.5)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+# ---- command line ---------------------------------------------------------------------------------
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="mvtrack calibrate", description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    p = sub.add_parser("intrinsics", help="a camera's lens from views of a board")
+    p.add_argument("--rig", required=True)
+    p.add_argument("--camera", required=True)
+    src = p.add_mutually_exclusive_group(required=True)
+    src.add_argument("--images", metavar="GLOB")
+    src.add_argument("--video", metavar="FILE")
+    p.add_argument("--board", required=True, help="chessboard:COLSxROWS:SQUARE_M or charuco:COLSxROWS:SQUARE_M:MARKER_M[:DICT]")
+    p.add_argument("--rational", action="store_true", help="8 coefficients (wide lenses)")
+    p.add_argument("--max-views", type=int, default=40, help="views used at most (default 40)")
+    p.add_argument("--every", type=int, default=10, help="--video: every N-th frame (default 10)")
+    p = sub.add_parser("extrinsics", help="a camera's place in the world (metres, z up, floor z = 0)")
+    p.add_argument("--rig", required=True)
+    p.add_argument("--camera", required=True)
+    p.add_argument("--points", metavar="CSV", help="u,v,x,y,z per line: pixel (raw image) and world point")
+    p.add_argument("--image", help="an image of a charuco board lying on the floor (its frame is the world's)")
+    p.add_argument("--board", help="with --image: charuco:COLSxROWS:SQUARE_M:MARKER_M[:DICT]")
+    p.add_argument("--max-rms-px", type=float, default=10.0,
+                   help="refuse a pose whose reprojection RMS exceeds this (default 10 px)")
+    p = sub.add_parser("check", help="the whole rig: heights, directions, coverage, overlaps, consistency")
+    p.add_argument("--rig", required=True)
+    p.add_argument("--plot", help="floor plan with the cameras and the coverage at head height (PNG)")
+    p.add_argument("--log", help="a recording with DETECTIONS_ and TRACKS: each camera pair's ray distances")
+    p.add_argument("--tracks", help="with --log: the TRACKS from this log instead (mvtrackd's output on --log)")
+    a = ap.parse_args(argv)
+    try:
+        if a.cmd == "intrinsics":
+            if a.max_views < 3 or a.every < 1:
+                raise CalibError("--max-views must be >= 3 and --every >= 1")
+            out = intrinsics(a)
+        elif a.cmd == "extrinsics":
+            out = extrinsics(a)
+        else:
+            out = check(a)
+    except CalibError as e:
+        print(f"mvtrack calibrate {a.cmd}: {e}", file=sys.stderr)
+        return 2
+    print(json.dumps(out))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
