@@ -301,6 +301,24 @@ def pose(img: np.ndarray, obj: np.ndarray, cam: Camera) -> tuple[np.ndarray, np.
     return r.ravel(), t.ravel()
 
 
+def fit_focal(img: np.ndarray, obj: np.ndarray, cam: Camera) -> None:
+    """The focal length from the points as well (a camera nobody calibrated with a board): one view,
+    the principal point and the lens as the rig has them, square pixels. Sets cam.K."""
+    if len(obj) < 6:
+        raise CalibError(f"too few points to fit the focal length too: {len(obj)} (6 or more)")
+    flags = (cv2.CALIB_USE_INTRINSIC_GUESS | cv2.CALIB_FIX_PRINCIPAL_POINT | cv2.CALIB_FIX_ASPECT_RATIO |
+             cv2.CALIB_ZERO_TANGENT_DIST | cv2.CALIB_FIX_K1 | cv2.CALIB_FIX_K2 | cv2.CALIB_FIX_K3)
+    try:
+        _, K, _, _, _ = cv2.calibrateCamera([obj.astype(np.float32)], [img.astype(np.float32)], (cam.width, cam.height),
+                                            np.asarray(cam.K, float).copy(), np.asarray(cam.dist, float)[:5].copy(),
+                                            flags=flags)
+    except cv2.error:
+        raise CalibError("the points do not fix a focal length (they need depth or a plane seen at an angle)") from None
+    if not (K[0, 0] > 0 and np.isfinite(K).all()):
+        raise CalibError("the points do not fix a focal length")
+    cam.K = K
+
+
 def floor_error(img: np.ndarray, obj: np.ndarray, cam: Camera, r: np.ndarray, t: np.ndarray) -> float | None:
     """Median distance on the floor between the floor points and their pixels cast onto z = 0, m."""
     on = np.abs(obj[:, 2]) < 1e-6
@@ -338,6 +356,8 @@ def extrinsics(a) -> dict:
         # world (z up) is that frame turned half a turn about its x axis
         img, obj = d[0].astype(np.float64), d[1].astype(np.float64) * np.array([1.0, -1.0, -1.0])
     check_points(img, obj, cam.width, cam.height)
+    if a.fit_focal:
+        fit_focal(img, obj, cam)
     r, t = pose(img, obj, cam)
     p, _ = cv2.projectPoints(obj, r, t, np.asarray(cam.K, float), np.asarray(cam.dist, float))
     err = np.linalg.norm(p.reshape(-1, 2) - img, axis=1)
@@ -353,8 +373,8 @@ def extrinsics(a) -> dict:
     print(f"{a.camera}: {len(obj)} points, reprojection RMS {rms:.3f} px (max {err.max():.2f} px)"
           + (f", on the floor {100 * fe:.1f} cm (median)" if fe is not None else "")
           + f"; camera at ({C[0]:.2f}, {C[1]:.2f}, {C[2]:.2f}) m", file=sys.stderr)
-    return {"camera": a.camera, "rms_px": rms, "max_px": float(err.max()), "floor_error_m": fe,
-            "position_m": C.tolist(), "points": int(len(obj))}
+    return {"camera": a.camera, "rms_px": rms, "median_px": float(np.median(err)), "max_px": float(err.max()),
+            "floor_error_m": fe, "position_m": C.tolist(), "points": int(len(obj)), "focal_px": float(cam.K[0][0])}
 
 
 # ---- check ----------------------------------------------------------------------------------------
@@ -562,6 +582,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--points", metavar="CSV", help="u,v,x,y,z per line: pixel (raw image) and world point")
     p.add_argument("--image", help="an image of a charuco board lying on the floor (its frame is the world's)")
     p.add_argument("--board", help="with --image: charuco:COLSxROWS:SQUARE_M:MARKER_M[:DICT]")
+    p.add_argument("--fit-focal", action="store_true",
+                   help="--points: fit the focal length too (a camera without a lens calibration; principal "
+                        "point and distortion as the rig has them, square pixels)")
     p.add_argument("--max-rms-px", type=float, default=10.0,
                    help="refuse a pose whose reprojection RMS exceeds this (default 10 px)")
     p = sub.add_parser("check", help="the whole rig: heights, directions, coverage, overlaps, consistency")

@@ -1,11 +1,10 @@
 """Real footage in 3D: vtest.avi (PETS 2009 S2.L1 view 1) through mvtrack-detect and mvtrackd with one
 camera, scored on the ground plane against the public ground truth (../shared/data/pets09_s2l1_gt.txt).
 
-1. The camera: calibrated from the ground truth's own world points. Each annotated box's
-   bottom-centre is a person's feet on the floor at the annotated (world_x, world_y, 0);
-   cv2.calibrateCamera on that one planar view (principal point at the picture's centre, square
-   pixels, no distortion) gives the focal length and the pose. The rig is written in the
-   annotation's world frame and metres, frame_rate 7 (the sequence's, as 2D MOT 2015 gives it).
+1. The camera: calibrated from the ground truth's own world points (mvtrack_tools.vtest_rig: each
+   annotated box's bottom-centre is a person's feet on the floor at the annotated world x, y;
+   tools/mvtrack calibrate extrinsics --fit-focal), in the annotation's world frame and metres,
+   frame_rate 7 (the sequence's, as 2D MOT 2015 gives it).
 2. mvtrack-detect on the video with that rig (masks off), then mvtrackd offline with --daemon-args.
 3. CLEAR MOT on the ground plane (x, y) with a 1 m threshold (motmetrics) over the frames given,
    every annotated person counted (the benchmark's flag 0 boxes, people far away, are don't-care:
@@ -41,32 +40,18 @@ def load_gt(path: Path) -> np.ndarray:
     return a[:, :9]
 
 
-def fit_rig(gt: np.ndarray, out: Path) -> dict:
-    """One camera from the annotation's feet: (box bottom-centre) <-> (world x, y, 0)."""
-    import cv2
-
-    from .rig import Camera, Rig
-
-    ok = (gt[:, 6] > 0) & (gt[:, 3] + gt[:, 5] < H - 2)
-    uv = np.stack([gt[ok, 2] + 0.5 * gt[ok, 4], gt[ok, 3] + gt[ok, 5]], axis=1).astype(np.float32)
-    xyz = np.stack([gt[ok, 7], gt[ok, 8], np.zeros(ok.sum())], axis=1).astype(np.float32)
-    K0 = np.array([[800.0, 0, (W - 1) / 2], [0, 800.0, (H - 1) / 2], [0, 0, 1]])
-    flags = (cv2.CALIB_USE_INTRINSIC_GUESS | cv2.CALIB_FIX_PRINCIPAL_POINT | cv2.CALIB_FIX_ASPECT_RATIO |
-             cv2.CALIB_ZERO_TANGENT_DIST | cv2.CALIB_FIX_K1 | cv2.CALIB_FIX_K2 | cv2.CALIB_FIX_K3)
-    rms, K, dist, rvecs, tvecs = cv2.calibrateCamera([xyz], [uv], (W, H), K0, np.zeros(5), flags=flags)
-    rvec, tvec = rvecs[0].ravel(), tvecs[0].ravel()
-    R = cv2.Rodrigues(rvec)[0]
-    centre = -R.T @ tvec
-    if centre[2] < 0:  # the annotation's ground plane seen from below: z is down in its frame
-        raise SystemExit("vtest3d: the calibration puts the camera under the floor")
-    proj, _ = cv2.projectPoints(xyz, rvec, tvec, K, np.zeros(5))
-    err = np.linalg.norm(proj.reshape(-1, 2) - uv, axis=1)
-    cam = Camera("view1", K, np.zeros(5), rvec, tvec, W, H, 3.0)
-    lo = np.array([gt[:, 7].min() - 2.0, gt[:, 8].min() - 2.0, 0.0])
-    hi = np.array([gt[:, 7].max() + 2.0, gt[:, 8].max() + 2.0, 2.5])
-    Rig([cam], lo, hi, FPS).write(out)
-    return {"rms_px": float(rms), "feet_error_px_median": float(np.median(err)), "focal_px": float(K[0, 0]),
-            "camera_height_m": float(centre[2]), "points": int(ok.sum())}
+def fit_rig(out: Path) -> dict:
+    """The camera from the annotation's feet (mvtrack_tools.vtest_rig, through tools/mvtrack calibrate
+    extrinsics --fit-focal), frame_rate 7."""
+    p = subprocess.run([sys.executable, "-m", "mvtrack_tools.vtest_rig", "--gt", str(GT), "--out", str(out),
+                        "--frame-rate", str(FPS)], capture_output=True, text=True)
+    if p.returncode != 0:
+        raise SystemExit(f"vtest3d: {p.stderr.strip()}")
+    r = json.loads(p.stdout.strip().splitlines()[-1])
+    from .rig import Rig
+    cam = Rig.read(out).cameras[0]
+    return {"rms_px": r["feet_rms_px"], "feet_error_px_median": r["feet_median_px"], "focal_px": r["focal_px"],
+            "camera_height_m": float(cam.centre[2]), "heights_median_m": r["heights_median_m"]}
 
 
 def tracks_by_frame(log: Path, t0: int) -> dict[int, list]:
@@ -125,7 +110,7 @@ def main(argv: list[str] | None = None) -> int:
     a.out.mkdir(parents=True, exist_ok=True)
     gt = load_gt(GT)
     rig = a.out / "rig.yaml"
-    cal = fit_rig(gt, rig)
+    cal = fit_rig(rig)
     det = a.out / "detections.lcm"
     t0 = 1_700_000_000_000_000
     subprocess.run([str(BUILD / "bin" / "mvtrack-detect"), "--rig", str(rig), "--video", f"view1={VTEST}",
@@ -143,8 +128,9 @@ def main(argv: list[str] | None = None) -> int:
         print(json.dumps(res))
     else:
         c = res["calibration"]
-        print(f"rig from {c['points']} feet: RMS {c['rms_px']:.2f} px (median {c['feet_error_px_median']:.2f} px), "
-              f"focal {c['focal_px']:.0f} px, camera {c['camera_height_m']:.2f} m above the floor")
+        print(f"rig from the annotation's feet: RMS {c['rms_px']:.2f} px (median {c['feet_error_px_median']:.2f} px), "
+              f"focal {c['focal_px']:.0f} px, camera {c['camera_height_m']:.2f} m above the floor, people "
+              f"{c['heights_median_m']:.2f} m tall (median)")
         for k in ("all", "frames_0_399", "frames_400_794"):
             r = res[k]
             print(f"{k:15s} MOTA {r['mota']:.3f}  MOTP {r['motp_m']:.3f} m  IDF1 {r['idf1']:.3f}  switches "
