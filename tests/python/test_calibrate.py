@@ -278,6 +278,13 @@ def test_errors_exit_2_and_leave_the_rig(tmp_path):
     for i in range(3):
         cv2.imwrite(str(blank / f"b{i}.png"), np.full((576, 768), 128, np.uint8))
     cam = room.cameras[0]
+    two = tmp_path / "two"
+    two.mkdir()
+    rng = np.random.default_rng(2)
+    board = Board("chessboard:9x6:0.05")
+    for i, tilt in enumerate(((0, 0, 0), (20, 10, 0))):
+        R_b, t_b = pose_in_front(cam, (0.5, 0.35), 1.2, (0.0, 0.0), tilt)
+        cv2.imwrite(str(two / f"v{i}.png"), render(cam, board, R_b, t_b, rng))
     line = lambda pts: "u,v,x,y,z\n" + "".join(f"{u},{v},{x},{y},{z}\n" for u, v, x, y, z in pts)  # noqa: E731
     collinear = tmp_path / "collinear.csv"
     X = np.array([[x, 1.0, 0.0] for x in np.linspace(0.5, 4.5, 6)])
@@ -299,6 +306,8 @@ def test_errors_exit_2_and_leave_the_rig(tmp_path):
           "chessboard:9x6:0.05"], "no board found"),
         (["intrinsics", "--rig", str(rig), "--camera", "cam0", "--images", str(tmp_path / "none*.png"), "--board",
           "chessboard:9x6:0.05"], "no image matches"),
+        (["intrinsics", "--rig", str(rig), "--camera", "cam0", "--images", str(two / "*.png"), "--board",
+          "chessboard:9x6:0.05"], "too few views"),
         (["intrinsics", "--rig", str(rig), "--camera", "cam0", "--images", str(blank / "*.png"), "--board",
           "chessboard:9:0.05"], "bad --board"),
         (["extrinsics", "--rig", str(rig), "--camera", "cam0", "--points", str(collinear)], "collinear"),

@@ -16,7 +16,8 @@ there, so only ChArUco is accepted for extrinsics.
 
 intrinsics: frames where the board is found are kept unless blurred (the variance of the
 Laplacian over the board under a third of the median's); of those, up to --max-views are chosen
-for coverage of the picture (a 4 x 4 grid) and of tilts (the board's normal in 30-degree bins).
+for coverage of the picture (a 4 x 4 grid) and of tilts (the board's normal in 30-degree bins); a
+view the fit leaves over three times the median error (and over 1 px) is dropped and the fit redone.
 OpenCV's model with 5 coefficients (8 with --rational). Prints the RMS, each view's error, and the
 picture's cells no view covered.
 
@@ -220,12 +221,26 @@ def intrinsics(a) -> dict:
     if len(views) < 3:
         raise CalibError(f"too few views of the board: {len(views)} (3 or more, from different angles)")
     flags = cv2.CALIB_RATIONAL_MODEL if a.rational else 0
-    rms, K, dist, rvecs, tvecs = cv2.calibrateCamera([v["obj"] for v in views], [v["img"] for v in views], (w, h),
-                                                     None, None, flags=flags)
-    per_view = []
-    for v, r, t in zip(views, rvecs, tvecs):
-        p, _ = cv2.projectPoints(v["obj"], r, t, K, dist)
-        per_view.append(float(np.sqrt(np.mean(np.sum((p.reshape(-1, 2) - v["img"]) ** 2, axis=1)))))
+
+    def solve(vs):
+        rms_, K_, dist_, rvecs_, tvecs_ = cv2.calibrateCamera([v["obj"] for v in vs], [v["img"] for v in vs], (w, h),
+                                                              None, None, flags=flags)
+        errs = []
+        for v, r, t in zip(vs, rvecs_, tvecs_):
+            p, _ = cv2.projectPoints(v["obj"], r, t, K_, dist_)
+            errs.append(float(np.sqrt(np.mean(np.sum((p.reshape(-1, 2) - v["img"]) ** 2, axis=1)))))
+        return rms_, K_, dist_, errs
+
+    rms, K, dist, per_view = solve(views)
+    # a view the model cannot fit (corners found in the wrong order, a board that bent) is dropped
+    # and the calibration done again without it
+    med_err = float(np.median(per_view))
+    bad = [i for i, e in enumerate(per_view) if e > max(1.0, 3.0 * med_err)]
+    dropped = []
+    if bad and len(views) - len(bad) >= 3:
+        dropped = [views[i]["index"] for i in bad]
+        views = [v for i, v in enumerate(views) if i not in bad]
+        rms, K, dist, per_view = solve(views)
     covered = set().union(*(v["cells"] for v in views))
     missing = sorted({(i, j) for i in range(4) for j in range(4)} - covered)
     n_dist = 8 if a.rational else 5
@@ -244,12 +259,15 @@ def intrinsics(a) -> dict:
     print(f"{a.camera}: {len(found)} of {len(frames)} images show the board, {len(found) - len(sharp)} blurred, "
           f"{len(views)} used; RMS {rms:.3f} px; fx {K[0, 0]:.1f} fy {K[1, 1]:.1f} cx {K[0, 2]:.1f} cy {K[1, 2]:.1f}",
           file=sys.stderr)
+    if dropped:
+        print("  dropped (the model fits them over three times worse than the rest): images " +
+              " ".join(str(i) for i in dropped), file=sys.stderr)
     for v, e in zip(views, per_view):
         print(f"  view {v['index']}: {e:.3f} px", file=sys.stderr)
     if missing:
         print("  picture cells (column, row of a 4 x 4 grid) no view covered: " +
               " ".join(f"({i},{j})" for i, j in missing), file=sys.stderr)
-    return {"camera": a.camera, "rms_px": float(rms), "views": len(views), "per_view_px": per_view,
+    return {"camera": a.camera, "rms_px": float(rms), "views": len(views), "per_view_px": per_view, "dropped": dropped,
             "camera_matrix": K.tolist(), "distortion": dist.ravel()[:n_dist].tolist(),
             "uncovered_cells": [list(c) for c in missing]}
 
