@@ -113,12 +113,6 @@ int mvt_body_on_body_below_head(const mvt_real axis[5], const mvt_real uv[2])
            point_seg_d2(uv, axis, axis + 2) <= axis[4] * axis[4];
 }
 
-int mvt_body_below_head(const mvt_real box[4], mvt_real head_v, const mvt_real uv[2])
-{
-    return box[2] > box[0] && uv[0] >= box[0] && uv[0] <= box[2] && uv[1] <= box[3] &&
-           uv[1] >= head_v + MVT_BODY_FRAGMENT_BELOW * (box[3] - box[1]);
-}
-
 mvt_real mvt_body_head_density(const mvt_tracker_t *self, const mvt_pkf_innov_t *in)
 {
     const mvt_imm_config_t *m = &self->cfg.motion;

@@ -94,10 +94,6 @@ int mvt_body_touch(const mvt_real a[5], const mvt_real b[5]);
  * MVT_BODY_FRAGMENT_BELOW of the axis' length below the head: a fragment's top. */
 int mvt_body_on_body_below_head(const mvt_real axis[5], const mvt_real uv[2]);
 
-/* Image point uv lies inside silhouette box and at least MVT_BODY_FRAGMENT_BELOW of its height
- * below its top (head_v: the head's row). */
-int mvt_body_below_head(const mvt_real box[4], mvt_real head_v, const mvt_real uv[2]);
-
 /* Camera k's clutter density: false blobs per frame over the picture's area, 1/px^2: the learnt
  * rate, or this frame's blobs beyond the heads it may show when they are more (a flood of false
  * alarms begins in one frame; a running mean would take seconds to believe it). */
