@@ -1,5 +1,5 @@
 """Calibration: a camera's lens from a board, its place in the room from world points or a board on
-the floor, and the checks that catch a bad rig. Writes the rig file of CONTRACT section 2.
+the floor, and the checks that catch a bad rig. Writes the rig file mvtrackd reads (OpenCV FileStorage YAML).
 
     tools/mvtrack calibrate intrinsics --rig RIG.yaml --camera NAME (--images GLOB | --video FILE)
                                        --board chessboard:COLSxROWS:SQUARE_M [--rational]
