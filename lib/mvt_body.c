@@ -123,6 +123,18 @@ mvt_real mvt_body_head_density(const mvt_tracker_t *self, const mvt_pkf_innov_t 
     return (MVT_R(1.0) - m->p_outlier) * own + displaced;
 }
 
+int mvt_body_near_side_wall(const mvt_tracker_config_t *c, const mvt_real x[3])
+{
+    return x[0] < c->volume_min[0] + c->exit_margin_m || x[0] > c->volume_max[0] - c->exit_margin_m ||
+           x[1] < c->volume_min[1] + c->exit_margin_m || x[1] > c->volume_max[1] - c->exit_margin_m;
+}
+
+int mvt_body_in_picture(const mvt_camera_t *cam, const mvt_real uv[2])
+{
+    return uv[0] >= MVT_R(0.0) && uv[1] >= MVT_R(0.0) && uv[0] <= (mvt_real)cam->width - MVT_R(1.0) &&
+           uv[1] <= (mvt_real)cam->height - MVT_R(1.0);
+}
+
 mvt_real mvt_body_clutter_density(const mvt_tracker_t *self, int k)
 {
     const mvt_camera_t *cam = &self->cams[k];
@@ -210,8 +222,7 @@ void mvt_body_existence(mvt_tracker_t *self, mvt_real dt)
             continue;
         }
         const mvt_real *x = tr->s.x;
-        const int near_wall = x[0] < c->volume_min[0] + c->exit_margin_m || x[0] > c->volume_max[0] - c->exit_margin_m ||
-                              x[1] < c->volume_min[1] + c->exit_margin_m || x[1] > c->volume_max[1] - c->exit_margin_m;
+        const int near_wall = mvt_body_near_side_wall(c, x);
         const mvt_real hazard = MVT_R(1.0) / c->stay_s + (near_wall ? MVT_R(1.0) / c->exit_s : MVT_R(0.0));
         const mvt_real ps = MVT_EXP(-dt * hazard);
         /* r' = ps r: odds' = ps r / (1 - ps r) = ps / ((1 - ps) (1 + odds^-1) + ps odds^-1 ... ), written

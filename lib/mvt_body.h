@@ -94,6 +94,12 @@ int mvt_body_touch(const mvt_real a[5], const mvt_real b[5]);
  * MVT_BODY_FRAGMENT_BELOW of the axis' length below the head: a fragment's top. */
 int mvt_body_on_body_below_head(const mvt_real axis[5], const mvt_real uv[2]);
 
+/* The head x lies within exit_margin_m of the volume's side walls: where people leave. */
+int mvt_body_near_side_wall(const mvt_tracker_config_t *c, const mvt_real x[3]);
+
+/* Pixel uv lies in camera cam's picture. */
+int mvt_body_in_picture(const mvt_camera_t *cam, const mvt_real uv[2]);
+
 /* Camera k's clutter density: false blobs per frame over the picture's area, 1/px^2: the learnt
  * rate, or this frame's blobs beyond the heads it may show when they are more (a flood of false
  * alarms begins in one frame; a running mean would take seconds to believe it). */

@@ -32,13 +32,6 @@ static void end_track(mvt_tracker_t *self, mvt_track_t *tr, uint64_t *reason)
     memset(tr, 0, sizeof(*tr));
 }
 
-/* Within exit_margin_m of the volume's side walls: where people leave (mvt_body_existence). */
-static int near_side_wall(const mvt_tracker_config_t *c, const mvt_real x[3])
-{
-    return x[0] < c->volume_min[0] + c->exit_margin_m || x[0] > c->volume_max[0] - c->exit_margin_m ||
-           x[1] < c->volume_min[1] + c->exit_margin_m || x[1] > c->volume_max[1] - c->exit_margin_m;
-}
-
 static int shown(const mvt_track_t *tr)
 {
     return tr->status == MVT_TRACK_CONFIRMED || tr->status == MVT_TRACK_COASTING;
@@ -63,7 +56,7 @@ void mvt_body_prune(mvt_tracker_t *self)
                 end_track(self, tr, &self->counters.deleted_unlikely);
             }
         } else if (!(tr->exist_lo >= lo_delete)) {
-            if (tr->was_shown && !near_side_wall(c, tr->s.x)) {
+            if (tr->was_shown && !mvt_body_near_side_wall(c, tr->s.x)) {
                 tr->dormant = 1; /* the label waits for its person (heir_of, mvt_body_birth.c) */
                 tr->status = MVT_TRACK_TENTATIVE;
                 tr->last_update_us = self->last_utime_us; /* asleep since */

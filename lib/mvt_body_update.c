@@ -38,14 +38,7 @@ static void update_feet(mvt_tracker_t *self, mvt_track_t *tr, int t, int k, cons
         !(in.d2 <= self->cfg.gate_chi2)) {
         return;
     }
-    mvt_err_t err;
-    if (self->cfg.motion.n == 1 && mvt_imm_model_is(&self->cfg.motion.model[0], MVT_MOTION_CV)) {
-        err = mvt_pkf_update(&tr->s, &in);
-    } else {
-        const mvt_real noise[4] = {in.r, MVT_R(0.0), MVT_R(0.0), in.r};
-        err = mvt_imm_update(&tr->imm, &self->cfg.motion, 2, in.H, in.y, noise, &tr->s);
-    }
-    if (err == MVT_OK) {
+    if (mvt_trk_update_pixels(self, tr, &in) == MVT_OK) {
         self->counters.foot_updates++;
     } else {
         self->counters.numeric_faults++;

@@ -58,8 +58,7 @@ void mvt_body_visibility(mvt_tracker_t *self, int k)
         }
         self->pred_ok[t] = 1;
         const mvt_real *h = ws->head[t];
-        if (h[0] >= MVT_R(0.0) && h[1] >= MVT_R(0.0) && h[0] <= (mvt_real)cam->width - MVT_R(1.0) &&
-            h[1] <= (mvt_real)cam->height - MVT_R(1.0)) {
+        if (mvt_body_in_picture(cam, h)) {
             ws->pd[t] = self->p_detect_k[k];
         }
     }

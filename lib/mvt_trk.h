@@ -234,6 +234,9 @@ mvt_err_t mvt_trk_update_pkf(mvt_tracker_t *self, mvt_track_t *tr, int k, const 
                              const mvt_real *extra_px2);
 void mvt_trk_settle(mvt_tracker_t *self, mvt_track_t *tr);
 mvt_err_t mvt_trk_update_point(mvt_tracker_t *self, mvt_track_t *tr, const mvt_real z[3], const mvt_real R[9]);
+/* A whole (not position-only) update with a pixel innovation of any H on the position, without a
+ * view's memory of displacement (the feet). */
+mvt_err_t mvt_trk_update_pixels(mvt_tracker_t *self, mvt_track_t *tr, const mvt_pkf_innov_t *in);
 mvt_err_t mvt_trk_truncate(mvt_tracker_t *self, mvt_track_t *tr, const mvt_real H[3], mvt_real value, mvt_real lo,
                            mvt_real hi);
 mvt_err_t mvt_trk_truncate_ground(mvt_tracker_t *self, mvt_track_t *tr, const mvt_real H[3], mvt_real value,

@@ -80,6 +80,15 @@ mvt_err_t mvt_trk_update_pkf(mvt_tracker_t *self, mvt_track_t *tr, int k, const 
     return mvt_imm_update_view(&tr->imm, &self->cfg.motion, in->H, in->y, noise, in->S, &tr->view[k], &tr->s);
 }
 
+mvt_err_t mvt_trk_update_pixels(mvt_tracker_t *self, mvt_track_t *tr, const mvt_pkf_innov_t *in)
+{
+    if (single(self)) {
+        return mvt_pkf_update(&tr->s, in);
+    }
+    const mvt_real noise[4] = {in->r, MVT_R(0.0), MVT_R(0.0), in->r};
+    return mvt_imm_update(&tr->imm, &self->cfg.motion, 2, in->H, in->y, noise, &tr->s);
+}
+
 mvt_err_t mvt_trk_update_point(mvt_tracker_t *self, mvt_track_t *tr, const mvt_real z[3], const mvt_real R[9])
 {
     if (single(self)) {
