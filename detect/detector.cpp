@@ -14,6 +14,13 @@ constexpr int kMaxFragments = 256;   /* largest components kept per frame */
 constexpr int kMinFragmentPx = 4;    /* working pixels: smaller components are noise */
 constexpr double kHeadRadiusM = 0.10;
 constexpr float kHeadMinM = 1.3f;    /* a fragment reaching this high at its own place has a head */
+constexpr double kShoulderDropM = 0.35; /* a standing person's shoulders below the head top */
+constexpr double kTwoWideM = 0.7;    /* wider than anyone's shoulders (about 0.45 m, the mask's
+                                      * closing and blur added) */
+constexpr double kKneeM = 0.3;       /* the legs' band above the floor whose middle is the body's */
+constexpr double kHeightSdM = 0.09;  /* spread of standing adults' heights, metres: a blob reaching
+                                      * 3 of them above person_height_m over its lowest feet holds
+                                      * someone farther away behind the person standing there */
 
 float dot2(const float a[2], float x, float y) { return a[0] * x + a[1] * y; }
 
@@ -55,6 +62,9 @@ std::string check_config(const Config &c, int width, int height)
     }
     if (!(c.var_threshold > 0.0)) {
         return "variance threshold must be > 0";
+    }
+    if (!(c.min_outline_contrast >= 0.0 && c.min_outline_contrast <= 1.0)) {
+        return "minimum outline contrast must be in [0, 1]";
     }
     if (!(c.min_person_fraction >= 0.0 && c.min_person_fraction <= 1.0)) {
         return "minimum person fraction must be in [0, 1]";
@@ -195,6 +205,9 @@ Detector::Column Detector::column_at(const double g[3]) const
     /* the silhouette's extreme point along "up" is the head sphere's rim, not the head top: they
      * differ by r (f / D - |d(image) / d(height)|), zero for a level view, r f / D from above */
     c.head_offset_px = (float)(kHeadRadiusM * (fw / d_head - (double)un / 0.1));
+    c.head_top[0] = pt[0];
+    c.head_top[1] = pt[1];
+    c.head_sd_px = (float)((double)un / 0.1 * kHeightSdM);
     c.px_per_m = (float)(fw / d_mid);
     const float width_px = (float)(2.0 * cfg_.body_half_width_m * fw / d_mid);
     const float cap_px = (float)(cfg_.body_half_width_m * fw / d_head);
@@ -297,6 +310,43 @@ void Detector::measure(const std::vector<cv::Point> &pix, const Column &col, con
     }
 }
 
+float Detector::outline_contrast(const std::vector<cv::Point> &pix, const cv::Rect &roi)
+{
+    if (bg_img_.size() != small_.size() || bg_img_.type() != small_.type()) {
+        return 1.0f;
+    }
+    cv::Rect r(roi.x - 1, roi.y - 1, roi.width + 2, roi.height + 2);
+    r &= cv::Rect(0, 0, wsmall_, hsmall_);
+    cv::cvtColor(small_(r), gray_f_, cv::COLOR_BGR2GRAY);
+    cv::cvtColor(bg_img_(r), gray_b_, cv::COLOR_BGR2GRAY);
+    inside_ = cv::Mat::zeros(r.size(), CV_8U);
+    for (const cv::Point &p : pix) {
+        inside_.at<uint8_t>(p.y - r.y, p.x - r.x) = 1;
+    }
+    /* 3x3 Sobel magnitudes of both images at the outline's pixels (those with a 4-neighbour
+     * outside the blob); the picture's own border counts as outline too */
+    const auto sobel = [](const cv::Mat &g, int x, int y) {
+        const int xm = std::max(0, x - 1), xp = std::min(g.cols - 1, x + 1);
+        const int ym = std::max(0, y - 1), yp = std::min(g.rows - 1, y + 1);
+        const auto at = [&g](int yy, int xx) { return (int)g.at<uint8_t>(yy, xx); };
+        const int gx = at(ym, xp) + 2 * at(y, xp) + at(yp, xp) - at(ym, xm) - 2 * at(y, xm) - at(yp, xm);
+        const int gy = at(yp, xm) + 2 * at(yp, x) + at(yp, xp) - at(ym, xm) - 2 * at(ym, x) - at(ym, xp);
+        return std::sqrt((double)(gx * gx + gy * gy));
+    };
+    double ef = 0.0, eb = 0.0;
+    for (const cv::Point &p : pix) {
+        const int x = p.x - r.x, y = p.y - r.y;
+        const bool outline = x == 0 || y == 0 || x == r.width - 1 || y == r.height - 1 ||
+                             !inside_.at<uint8_t>(y, x - 1) || !inside_.at<uint8_t>(y, x + 1) ||
+                             !inside_.at<uint8_t>(y - 1, x) || !inside_.at<uint8_t>(y + 1, x);
+        if (outline) {
+            ef += sobel(gray_f_, x, y);
+            eb += sobel(gray_b_, x, y);
+        }
+    }
+    return ef + eb > 0.0 ? (float)(ef / (ef + eb)) : 1.0f;
+}
+
 void Detector::fill_masks(Result &out)
 {
     if (!cfg_.masks) {
@@ -317,7 +367,7 @@ void Detector::process(const cv::Mat &bgr, Result &out)
 {
     CV_Assert(bgr.type() == CV_8UC3 && bgr.cols == cam_.width && bgr.rows == cam_.height);
     out.blobs.clear();
-    out.fragments = out.dropped_small = out.dropped_border = out.splits = 0;
+    out.fragments = out.dropped_small = out.dropped_border = out.dropped_background = out.splits = out.inferred = 0;
     if (cfg_.work_scale == 1) {
         small_ = bgr;
     } else {
@@ -366,10 +416,12 @@ void Detector::process(const cv::Mat &bgr, Result &out)
     }
     frames_++;
     const double rate = cfg_.learning_rate >= 0.0 ? cfg_.learning_rate : 1.0 / history_frames_;
-    if (cfg_.absorb_s > 0.0 && cfg_.model == BgModel::mog2) {
-        /* selective update: classify without learning, then learn a frame in which the pixels
-         * foreground for less than absorb_s show the background's own colour (MOG2 only: KNN's
-         * background image is not its model's, and fed back it found no one on vtest.avi) */
+    const bool selective = cfg_.absorb_s > 0.0 && cfg_.model == BgModel::mog2;
+    if (selective) {
+        /* selective update: classify without learning; once the blobs are known, learn a frame in
+         * which the pixels foreground for less than absorb_s show the background's own colour
+         * (MOG2 only: KNN's background image is not its model's, and fed back it found no one
+         * on vtest.avi) */
         bg_->apply(small_, fg_raw_, 0.0);
         if (fg_age_.size() != small_.size()) {
             fg_age_ = cv::Mat::zeros(small_.size(), CV_32S);
@@ -385,27 +437,34 @@ void Detector::process(const cv::Mat &bgr, Result &out)
                 p[x] = (uint8_t)(f[x] == 255 && a[x] < absorb_frames ? 255 : 0);
             }
         }
-        /* the background's colour moves by 1/history a frame: its image, a pass over every
-         * mixture, is taken once a second, not every frame */
-        const int64_t refresh = std::max<int64_t>(1, std::llround(cfg_.frame_rate));
-        if (bg_img_.empty() || frames_ % refresh == 0) {
-            bg_->getBackgroundImage(bg_img_);
-        }
+    } else {
+        bg_->apply(small_, fg_raw_, rate);
+    }
+    /* the background's colour moves by 1/history a frame: its image, a pass over every mixture,
+     * is taken once a second, not every frame */
+    const int64_t refresh = std::max<int64_t>(1, std::llround(cfg_.frame_rate));
+    if (bg_img_.empty() || frames_ % refresh == 0) {
+        bg_->getBackgroundImage(bg_img_);
+    }
+    cv::threshold(fg_raw_, fg_, 200, 255, cv::THRESH_BINARY); /* shadows are 127 */
+    cv::morphologyEx(fg_, tmp_, cv::MORPH_OPEN, open_kernel_);
+    cv::morphologyEx(tmp_, fg_, cv::MORPH_CLOSE, close_kernel_);
+
+    find_blobs(out, selective);
+
+    cv::compare(fg_, 0, prev_bg_, cv::CMP_EQ); /* this frame's background, for the next gain */
+    if (selective) {
         small_.copyTo(learn_);
         if (bg_img_.size() == learn_.size() && bg_img_.type() == learn_.type()) {
             bg_img_.copyTo(learn_, protect_);
         }
         bg_->apply(learn_, fg_scratch_, rate);
-    } else {
-        bg_->apply(small_, fg_raw_, rate);
     }
-    cv::threshold(fg_raw_, fg_, 200, 255, cv::THRESH_BINARY); /* shadows are 127 */
-    cv::morphologyEx(fg_, tmp_, cv::MORPH_OPEN, open_kernel_);
-    cv::morphologyEx(tmp_, fg_, cv::MORPH_CLOSE, close_kernel_);
-    cv::compare(fg_, 0, prev_bg_, cv::CMP_EQ); /* this frame's background, for the next gain */
-
     fill_masks(out);
+}
 
+void Detector::find_blobs(Result &out, bool selective)
+{
     const int n = cv::connectedComponentsWithStats(fg_, labels_, stats_, centroids_, 8, CV_32S);
     /* keep the largest components */
     std::vector<int> kept;
@@ -584,6 +643,35 @@ void Detector::process(const cv::Mat &bgr, Result &out)
                     }
                 }
             }
+            /* no dip between heads, but wider at the shoulders (the band within shoulder_drop of
+             * the top) than one person can be: two people side by side, heads touching. Cut at
+             * the lowest point of the head profile away from the band's ends, or its middle */
+            if (cuts.empty()) {
+                const float vpm = c.height_px / (float)cfg_.person_height_m;
+                float a_top = -1e30f;
+                for (int bi = 0; bi < nb; bi++) {
+                    a_top = std::max(a_top, top[bi]);
+                }
+                int first = -1, last = -1;
+                for (int bi = 0; bi < nb; bi++) {
+                    if (top[bi] >= a_top - (float)kShoulderDropM * vpm) {
+                        first = first < 0 ? bi : first;
+                        last = bi;
+                    }
+                }
+                if (first >= 0 && (float)(last - first + 1) > (float)kTwoWideM * ppm) {
+                    const int margin = (int)std::lround(0.2 * (double)ppm);
+                    int cut = (first + last) / 2;
+                    float dip = 1e30f;
+                    for (int j = first + margin; j <= last - margin; j++) {
+                        if (top[j] < dip) {
+                            dip = top[j];
+                            cut = j;
+                        }
+                    }
+                    cuts.push_back(s_lo + (float)cut + 0.5f);
+                }
+            }
         }
         for (size_t si = 0; si <= cuts.size(); si++) {
             const float lo = si == 0 ? -1e30f : cuts[si - 1], hi = si == cuts.size() ? 1e30f : cuts[si];
@@ -604,6 +692,17 @@ void Detector::process(const cv::Mat &bgr, Result &out)
                 continue;
             }
             const cv::Rect roi(x0, y0, x1 - x0 + 1, y1 - y0 + 1);
+            if (outline_contrast(seg, roi) < (float)cfg_.min_outline_contrast) {
+                /* the background's own edges under another light, or a ghost: background */
+                out.dropped_background++;
+                for (const cv::Point &p : seg) {
+                    fg_.at<uint8_t>(p) = 0;
+                    if (selective) {
+                        protect_.at<uint8_t>(p) = 0;
+                    }
+                }
+                continue;
+            }
             cv::cvtColor(small_(roi), hsv_, cv::COLOR_BGR2HSV_FULL);
             Blob b;
             bool at_border = false;
@@ -615,6 +714,54 @@ void Detector::process(const cv::Mat &bgr, Result &out)
             out.blobs.push_back(b);
             if (si > 0) {
                 out.splits++;
+            }
+            /* a blob reaching more than three height spreads above an average person standing on
+             * its lowest feet: that person stands in front of someone farther away, their head
+             * inside the blob where the mask shows no outline. Their head is reported where a
+             * person of average height standing there has it, with the spread of heights as its
+             * noise. The feet are the segment's own (the mean of its lowest pixels along down) */
+            if (c.valid) {
+                float a_min = 1e30f;
+                for (const cv::Point &p : seg) {
+                    a_min = std::min(a_min, dot2(c.up, (float)p.x, (float)p.y));
+                }
+                /* the feet's row from the lowest pixels, their middle from the legs' band below
+                 * the knees (a walking person's lowest pixel is the forward foot) */
+                const float knee = a_min + (float)kKneeM * c.height_px / (float)cfg_.person_height_m;
+                double fx = 0.0, fy = 0.0, lx = 0.0, ly = 0.0;
+                int nf = 0, nl = 0;
+                for (const cv::Point &p : seg) {
+                    const float a = dot2(c.up, (float)p.x, (float)p.y);
+                    if (a <= a_min + 1.0f) {
+                        fx += p.x;
+                        fy += p.y;
+                        nf++;
+                    }
+                    if (a <= knee) {
+                        lx += p.x;
+                        ly += p.y;
+                        nl++;
+                    }
+                }
+                /* the legs' middle moved along the image's "across" direction only */
+                const float perp_f = dot2(perp, (float)(fx / nf), (float)(fy / nf)), perp_l = dot2(perp, (float)(lx / nl), (float)(ly / nl));
+                const float footx = (float)(fx / nf) + (perp_l - perp_f) * perp[0];
+                const float footy = (float)(fy / nf) + (perp_l - perp_f) * perp[1];
+                double g[3];
+                const Column cs = ground_point(footx, footy, g) ? column_at(g) : Column();
+                const float s = (float)cfg_.work_scale;
+                const float tx = (b.u + 0.5f) / s - 0.5f, ty = (b.v + 0.5f) / s - 0.5f;
+                const int hx = (int)std::lround(cs.head_top[0]), hy = (int)std::lround(cs.head_top[1]);
+                if (cs.valid && height_at(cs, tx, ty) > (float)(cfg_.person_height_m + 3.0 * kHeightSdM) &&
+                    hx >= x0 && hx <= x1 && hy > y0 && hy <= y1 && fg_.at<uint8_t>(hy, hx) != 0) {
+                    Blob near = b;
+                    near.u = (cs.head_top[0] + 0.5f) * s - 0.5f;
+                    near.v = (cs.head_top[1] + 0.5f) * s - 0.5f;
+                    near.bbox[1] = near.v;
+                    near.sigma_px = cs.head_sd_px * s;
+                    out.blobs.push_back(near);
+                    out.inferred++;
+                }
             }
         }
     }

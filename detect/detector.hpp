@@ -69,6 +69,12 @@ struct Config {
     double body_half_width_m = 0.22; /* a standing person's half-width, for the expected silhouette */
     double person_height_m = 1.7;    /* a standing person's height, for the expected silhouette */
     double min_person_fraction = 0.15; /* minimum foreground area / expected silhouette area */
+    double min_outline_contrast = 0.55; /* minimum share of the edges along a blob's outline that are
+                                      * the frame's rather than the background image's: something new
+                                      * in front of the background ends in an edge of its own (share
+                                      * near 1 over a plain background, above 0.5 over texture); the
+                                      * background's own edges under another light, or a ghost of
+                                      * what the background learnt, give 0.5 or less. 0: off */
     double head_gap_m = 0.12;        /* dip below two head peaks that splits a group */
     int mask_scale = 4;              /* image pixels per mask pixel (output mask) */
     bool masks = false;              /* produce the mask and per-pixel hue/saturation */
@@ -79,6 +85,7 @@ struct Blob {
     float bbox[4] = {0, 0, 0, 0};    /* x_min, y_min, x_max, y_max, full-resolution pixels */
     float score = 0;                 /* [0, 1] */
     float hue = -1, saturation = -1; /* torso colour; < 0 unknown */
+    float sigma_px = 0;              /* 1-sigma noise of (u, v) when known (an inferred head), else 0 */
 };
 
 struct Result {
@@ -88,9 +95,11 @@ struct Result {
     int fragments = 0;               /* connected components kept before grouping */
     int dropped_small = 0;           /* groups too small for a person */
     int dropped_border = 0;          /* groups whose head top is cut by the image border */
+    int dropped_background = 0;      /* blobs whose outline is the background's edges (light, ghosts) */
     bool warming_up = false;         /* the background model is still being initialised: no blobs */
     float gain = 1.0f;               /* illumination gain applied to this frame */
     int splits = 0;                  /* extra blobs made by splitting groups */
+    int inferred = 0;                /* heads inferred in front of a farther person (no outline) */
 };
 
 /* Checks a configuration; returns "" or the reason. */
@@ -119,6 +128,8 @@ class Detector {
         float px_per_m = 0;          /* image length of a horizontal metre at mid-body */
         float head_offset_px = 0;    /* head sphere's rim beyond the head top, along up */
         float expected_area = 0;     /* expected silhouette area */
+        float head_top[2] = {0, 0};  /* head top of a person of average height standing there */
+        float head_sd_px = 0;        /* its spread along up from the spread of heights */
     };
 
     bool ground_point(float xw, float yw, double g[3]) const;
@@ -128,6 +139,8 @@ class Detector {
     static bool in_column(const Column &c, float x, float y);
     static float height_at(const Column &c, float x, float y);
     void fill_masks(Result &out);
+    void find_blobs(Result &out, bool selective);
+    float outline_contrast(const std::vector<cv::Point> &pix, const cv::Rect &roi);
     void measure(const std::vector<cv::Point> &pix, const Column &col, const cv::Mat &hsv, const cv::Rect &roi,
                  Blob &b, bool *at_border) const;
 
@@ -145,6 +158,7 @@ class Detector {
     cv::Mat prev_bg_;                /* last frame's background pixels (where the gain is measured) */
     cv::Mat fg_age_;                 /* frames each working pixel has been foreground (absorb_s) */
     cv::Mat bg_img_, learn_, protect_, fg_scratch_;
+    cv::Mat gray_f_, gray_b_, inside_; /* outline contrast, per blob */
 };
 
 } // namespace mvdet

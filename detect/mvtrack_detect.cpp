@@ -75,6 +75,9 @@ void usage(FILE *f)
         "  --var-threshold X       mog2: squared Mahalanobis distance (default 16); knn: squared\n"
         "                          distance (default 400)\n"
         "  --no-shadows            do not detect shadows (they become foreground)\n"
+        "  --min-outline-contrast X  drop blobs whose outline is less than X the frame's edges and\n"
+        "                          the rest the background image's (the background under another\n"
+        "                          light, a ghost of what it learnt; default 0.55; 0: off)\n"
         "  --min-person-fraction X drop blobs with less foreground than X of a person's expected\n"
         "                          silhouette at their place (default 0.15)\n"
         "  --sigma-px X            1-sigma pixel noise written in each detection (default 0: the rig's)\n"
@@ -185,7 +188,7 @@ int main(int argc, char **argv)
     mvdet::Config cfg;
 
     enum { O_RIG = 1000, O_VIDEO, O_OUT, O_START, O_MASKS, O_MASK_SCALE, O_BG, O_WORK, O_HISTORY, O_ABSORB, O_BOOT, O_NO_GAIN, O_VAR,
-           O_NO_SHADOWS, O_MINFRAC, O_SIGMA, O_MAXF, O_STATUS, O_THREADS, O_PROGRESS, O_QUIET, O_REALTIME };
+           O_NO_SHADOWS, O_MINFRAC, O_OUTLINE, O_SIGMA, O_MAXF, O_STATUS, O_THREADS, O_PROGRESS, O_QUIET, O_REALTIME };
     static const struct option opts[] = {
         {"rig", required_argument, nullptr, O_RIG}, {"video", required_argument, nullptr, O_VIDEO},
         {"out", required_argument, nullptr, O_OUT}, {"start-utime", required_argument, nullptr, O_START},
@@ -196,6 +199,7 @@ int main(int argc, char **argv)
         {"bootstrap-s", required_argument, nullptr, O_BOOT}, {"no-gain-compensation", no_argument, nullptr, O_NO_GAIN}, {"var-threshold", required_argument, nullptr, O_VAR},
         {"no-shadows", no_argument, nullptr, O_NO_SHADOWS},
         {"min-person-fraction", required_argument, nullptr, O_MINFRAC},
+        {"min-outline-contrast", required_argument, nullptr, O_OUTLINE},
         {"sigma-px", required_argument, nullptr, O_SIGMA}, {"max-frames", required_argument, nullptr, O_MAXF},
         {"status-s", required_argument, nullptr, O_STATUS}, {"threads", required_argument, nullptr, O_THREADS},
         {"progress", no_argument, nullptr, O_PROGRESS}, {"quiet", no_argument, nullptr, O_QUIET},
@@ -254,6 +258,10 @@ int main(int argc, char **argv)
         case O_MINFRAC:
             if (!parse_double(optarg, &dv) || dv < 0 || dv > 1) fail("--min-person-fraction must be in [0, 1]");
             cfg.min_person_fraction = dv;
+            break;
+        case O_OUTLINE:
+            if (!parse_double(optarg, &dv) || dv < 0 || dv > 1) fail("--min-outline-contrast must be in [0, 1]");
+            cfg.min_outline_contrast = dv;
             break;
         case O_SIGMA:
             if (!parse_double(optarg, &sigma_px) || sigma_px < 0 || sigma_px > 1000) fail("--sigma-px must be in [0, 1000]");
@@ -405,7 +413,7 @@ int main(int argc, char **argv)
                 mvtrack_detection_t &d = dets[i];
                 d.u = b.u;
                 d.v = b.v;
-                d.sigma_px = sigma;
+                d.sigma_px = std::max(sigma, b.sigma_px);
                 std::memcpy(d.bbox, b.bbox, sizeof d.bbox);
                 d.score = b.score;
                 d.hue = b.hue;

@@ -116,13 +116,13 @@ def detect_log(tmp_path: Path, rig_path: Path, videos: dict[str, Path], *extra: 
 
 @pytest.mark.accuracy
 def test_vtest_real_footage_finds_labelled_heads():
-    """vtest.avi (real people, PETS 2009): >= 90 % of the hand-labelled heads within 15 px, <= 1
-    false blob per labelled frame."""
+    """vtest.avi (real people, PETS 2009): >= 90 % of the 32 hand-labelled heads within 15 px,
+    <= 1 false blob per labelled frame."""
     from mvtrack_tools import vtest_eval
 
     if not vtest_eval.VTEST.exists():
         pytest.fail(f"{vtest_eval.VTEST} missing: tools/mvtrack setup installs opencv-doc")
-    out = subprocess.run([str(REPO / "tools" / "mvtrack"), "python", "-m", "mvtrack_tools.vtest_eval", "--json"],
+    out = subprocess.run([str(REPO / "tools" / "mvtrack"), "vtest", "--truth", "hand", "--json"],
                          capture_output=True, text=True, timeout=300)
     assert out.returncode == 0, out.stderr
     r = json.loads(out.stdout.strip().splitlines()[-1])
@@ -130,6 +130,26 @@ def test_vtest_real_footage_finds_labelled_heads():
     assert r["recall"] >= 0.90, r
     assert r["false_blobs_per_frame"] <= 1.0, r
     assert r["head_error_px_median"] < 5.0, r
+
+
+@pytest.mark.accuracy
+def test_vtest_whole_sequence_against_the_public_ground_truth():
+    """vtest.avi, frames 20-794 against the PETS 2009 S2.L1 annotation (where the project's
+    reference data is present): recall >= 0.92 within 15 px and <= 0.4 false blobs a frame, in
+    the frames the detector was developed on and in the held-out ones."""
+    from mvtrack_tools import vtest_eval
+
+    if not vtest_eval.GT_JSON.exists():
+        pytest.skip(f"{vtest_eval.GT_JSON} is not on this machine")
+    out = subprocess.run([str(REPO / "tools" / "mvtrack"), "vtest", "--json"], capture_output=True, text=True,
+                         timeout=300)
+    assert out.returncode == 0, out.stderr
+    r = json.loads(out.stdout.strip().splitlines()[-1])["detectors"]["mvtrack-detect"]
+    assert r["20-794"]["people"] > 4000, r
+    for part in ("20-399", "400-794"):
+        assert r[part]["recall"] >= 0.9, (part, r[part])
+        assert r[part]["false_blobs_per_frame"] <= 0.5, (part, r[part])
+    assert r["20-794"]["recall"] >= 0.92 and r["20-794"]["false_blobs_per_frame"] <= 0.4, r["20-794"]
 
 
 def test_fragmented_body_is_one_blob_with_its_head_top(tmp_path):
@@ -375,3 +395,46 @@ def test_person_standing_still_kept_for_absorb_s(tmp_path):
     assert first > 0.9 and last > 0.9, (first, last)
     first, last = still_person_seen(tmp_path, "--absorb-s", "2")
     assert first > 0.9 and last < 0.2, (first, last)
+
+
+def ghost_blobs(tmp_path: Path, *extra: str) -> tuple[int, int]:
+    """Camera 0 of the smart room at 25 fps: person A stands at P through the background's 2 s
+    start-up while B walks past; at 3 s A walks away (0.9 m/s, 1.8 m) and stands there. Returns
+    the frames, from 5 s after A has left P's place (cleared at 4 s) to the end at 12 s, with a
+    blob on P's head (within 15 px), and the share of frames from 5 s on where A's new place and
+    B were both detected."""
+    rig = smartroom_rig(tmp_path)
+    cam = rig.cameras[0]
+    rng = np.random.default_rng(7)
+    bg = background(rng)
+    frames, tops = [], []
+    p_top = None
+    for i in range(300):
+        img = bg.copy()
+        ya = 2.5 if i < 75 else min(4.3, 2.5 + 0.9 * (i - 75) / 25.0)
+        ta = draw_person(img, cam, 3.0, ya, 1.75, (40, 160, 60))
+        tb = draw_person(img, cam, 1.5 + 0.8 * i / 25.0, 1.2, 1.7, (160, 40, 60))
+        if i == 0:
+            p_top = ta
+        img += rng.normal(0, 2.0, img.shape).astype(np.float32)
+        frames.append(np.clip(img, 0, 255).astype(np.uint8))
+        tops.append((ta, tb))
+    path = tmp_path / "startup.avi"
+    write_video(path, frames)
+    msgs = detect_log(tmp_path, tmp_path / "rig.yaml", {cam.name: path}, *extra)
+    ghost = sum(any(np.hypot(d.u - p_top[0], d.v - p_top[1]) < 15.0 for d in m.detections) for m in msgs[225:])
+    seen = [all(any(np.hypot(d.u - t[0], d.v - t[1]) < 15.0 for d in m.detections) for t in tops[i])
+            for i, m in enumerate(msgs) if i >= 125 and 0 < tops[i][1][0] < 760]
+    return ghost, float(np.mean(seen))
+
+
+@pytest.mark.accuracy
+def test_person_present_at_start_leaves_no_ghost(tmp_path):
+    """A person standing where the background starts (in its 2 s start-up median) leaves a ghost
+    when they walk away: with the outline test off (--min-outline-contrast 0) a blob stays on
+    their old place; by default none from 5 s after they left, and both people stay detected."""
+    ghost, seen = ghost_blobs(tmp_path, "--min-outline-contrast", "0")
+    assert ghost > 50, ghost
+    ghost, seen = ghost_blobs(tmp_path)
+    assert ghost == 0, ghost
+    assert seen > 0.9, seen
