@@ -17,10 +17,6 @@ constexpr float kHeadMinM = 1.3f;    /* a fragment reaching this high at its own
 constexpr double kShoulderDropM = 0.35; /* a standing person's shoulders below the head top */
 constexpr double kTwoWideM = 0.7;    /* wider than anyone's shoulders (about 0.45 m, the mask's
                                       * closing and blur added) */
-constexpr double kKneeM = 0.3;       /* the legs' band above the floor whose middle is the body's */
-constexpr double kHeightSdM = 0.09;  /* spread of standing adults' heights, metres: a blob reaching
-                                      * 3 of them above person_height_m over its lowest feet holds
-                                      * someone farther away behind the person standing there */
 
 float dot2(const float a[2], float x, float y) { return a[0] * x + a[1] * y; }
 
@@ -205,9 +201,6 @@ Detector::Column Detector::column_at(const double g[3]) const
     /* the silhouette's extreme point along "up" is the head sphere's rim, not the head top: they
      * differ by r (f / D - |d(image) / d(height)|), zero for a level view, r f / D from above */
     c.head_offset_px = (float)(kHeadRadiusM * (fw / d_head - (double)un / 0.1));
-    c.head_top[0] = pt[0];
-    c.head_top[1] = pt[1];
-    c.head_sd_px = (float)((double)un / 0.1 * kHeightSdM);
     c.px_per_m = (float)(fw / d_mid);
     const float width_px = (float)(2.0 * cfg_.body_half_width_m * fw / d_mid);
     const float cap_px = (float)(cfg_.body_half_width_m * fw / d_head);
@@ -367,7 +360,7 @@ void Detector::process(const cv::Mat &bgr, Result &out)
 {
     CV_Assert(bgr.type() == CV_8UC3 && bgr.cols == cam_.width && bgr.rows == cam_.height);
     out.blobs.clear();
-    out.fragments = out.dropped_small = out.dropped_border = out.dropped_background = out.splits = out.inferred = 0;
+    out.fragments = out.dropped_small = out.dropped_border = out.dropped_background = out.splits = 0;
     if (cfg_.work_scale == 1) {
         small_ = bgr;
     } else {
@@ -714,54 +707,6 @@ void Detector::find_blobs(Result &out, bool selective)
             out.blobs.push_back(b);
             if (si > 0) {
                 out.splits++;
-            }
-            /* a blob reaching more than three height spreads above an average person standing on
-             * its lowest feet: that person stands in front of someone farther away, their head
-             * inside the blob where the mask shows no outline. Their head is reported where a
-             * person of average height standing there has it, with the spread of heights as its
-             * noise. The feet are the segment's own (the mean of its lowest pixels along down) */
-            if (c.valid) {
-                float a_min = 1e30f;
-                for (const cv::Point &p : seg) {
-                    a_min = std::min(a_min, dot2(c.up, (float)p.x, (float)p.y));
-                }
-                /* the feet's row from the lowest pixels, their middle from the legs' band below
-                 * the knees (a walking person's lowest pixel is the forward foot) */
-                const float knee = a_min + (float)kKneeM * c.height_px / (float)cfg_.person_height_m;
-                double fx = 0.0, fy = 0.0, lx = 0.0, ly = 0.0;
-                int nf = 0, nl = 0;
-                for (const cv::Point &p : seg) {
-                    const float a = dot2(c.up, (float)p.x, (float)p.y);
-                    if (a <= a_min + 1.0f) {
-                        fx += p.x;
-                        fy += p.y;
-                        nf++;
-                    }
-                    if (a <= knee) {
-                        lx += p.x;
-                        ly += p.y;
-                        nl++;
-                    }
-                }
-                /* the legs' middle moved along the image's "across" direction only */
-                const float perp_f = dot2(perp, (float)(fx / nf), (float)(fy / nf)), perp_l = dot2(perp, (float)(lx / nl), (float)(ly / nl));
-                const float footx = (float)(fx / nf) + (perp_l - perp_f) * perp[0];
-                const float footy = (float)(fy / nf) + (perp_l - perp_f) * perp[1];
-                double g[3];
-                const Column cs = ground_point(footx, footy, g) ? column_at(g) : Column();
-                const float s = (float)cfg_.work_scale;
-                const float tx = (b.u + 0.5f) / s - 0.5f, ty = (b.v + 0.5f) / s - 0.5f;
-                const int hx = (int)std::lround(cs.head_top[0]), hy = (int)std::lround(cs.head_top[1]);
-                if (cs.valid && height_at(cs, tx, ty) > (float)(cfg_.person_height_m + 3.0 * kHeightSdM) &&
-                    hx >= x0 && hx <= x1 && hy > y0 && hy <= y1 && fg_.at<uint8_t>(hy, hx) != 0) {
-                    Blob near = b;
-                    near.u = (cs.head_top[0] + 0.5f) * s - 0.5f;
-                    near.v = (cs.head_top[1] + 0.5f) * s - 0.5f;
-                    near.bbox[1] = near.v;
-                    near.sigma_px = cs.head_sd_px * s;
-                    out.blobs.push_back(near);
-                    out.inferred++;
-                }
             }
         }
     }

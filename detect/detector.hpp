@@ -13,7 +13,13 @@
  *    centroid lies in that column joins the person. Repeat until every fragment has a person.
  *  - people to blobs: a group wider than one person is split where its head profile (the highest
  *    pixel per slice across the local vertical) has two peaks a body apart with a dip between them
- *    (two heads side by side; the dip is the shoulders).
+ *    (two heads side by side; the dip is the shoulders), or, with no such dip, where it is wider
+ *    within a shoulder's drop of its top than anyone's shoulders (two heads touching): at the
+ *    profile's lowest point away from that band's ends.
+ *  - background, not a blob: where the outline of a blob is no more an edge of the frame than of
+ *    the background image (`min_outline_contrast`), what changed is the light on a still surface
+ *    (a wall, a windscreen, a car roof) or a ghost of what the background learnt (a person present
+ *    while it started): its pixels leave the mask and are learnt like the background's.
  *  - a blob too small for a person at its place (area under `min_person_fraction` of the
  *    expected silhouette) is clutter and dropped; a blob whose top touches the image border has no
  *    visible head top and is dropped too (its mask still goes out).
@@ -85,7 +91,6 @@ struct Blob {
     float bbox[4] = {0, 0, 0, 0};    /* x_min, y_min, x_max, y_max, full-resolution pixels */
     float score = 0;                 /* [0, 1] */
     float hue = -1, saturation = -1; /* torso colour; < 0 unknown */
-    float sigma_px = 0;              /* 1-sigma noise of (u, v) when known (an inferred head), else 0 */
 };
 
 struct Result {
@@ -99,7 +104,6 @@ struct Result {
     bool warming_up = false;         /* the background model is still being initialised: no blobs */
     float gain = 1.0f;               /* illumination gain applied to this frame */
     int splits = 0;                  /* extra blobs made by splitting groups */
-    int inferred = 0;                /* heads inferred in front of a farther person (no outline) */
 };
 
 /* Checks a configuration; returns "" or the reason. */
@@ -128,8 +132,6 @@ class Detector {
         float px_per_m = 0;          /* image length of a horizontal metre at mid-body */
         float head_offset_px = 0;    /* head sphere's rim beyond the head top, along up */
         float expected_area = 0;     /* expected silhouette area */
-        float head_top[2] = {0, 0};  /* head top of a person of average height standing there */
-        float head_sd_px = 0;        /* its spread along up from the spread of heights */
     };
 
     bool ground_point(float xw, float yw, double g[3]) const;

@@ -413,7 +413,7 @@ int main(int argc, char **argv)
                 mvtrack_detection_t &d = dets[i];
                 d.u = b.u;
                 d.v = b.v;
-                d.sigma_px = std::max(sigma, b.sigma_px);
+                d.sigma_px = sigma;
                 std::memcpy(d.bbox, b.bbox, sizeof d.bbox);
                 d.score = b.score;
                 d.hue = b.hue;

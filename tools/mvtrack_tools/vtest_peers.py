@@ -7,7 +7,8 @@ OpenCV documentation and tutorials build it, on one core:
 - knn: the same with cv::BackgroundSubtractorKNN (history 500, threshold 400, shadows).
 - hog: cv::HOGDescriptor with its default people detector (Dalal and Triggs' 64x128 window),
   detectMultiScale with its defaults (stride 8, scale 1.05, grouping 2); the head is the box's
-  top-centre.
+  top-centre (and, scored apart by vtest_eval as "hog, h/8", an eighth of the box lower: the
+  training window's margin above the head).
 
 Each returns, per frame, a list of (u, v, (x0, y0, x1, y1)) at full resolution.
 """
