@@ -53,8 +53,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--gt", type=Path, default=GT)
     ap.add_argument("--out", type=Path, required=True, help="rig file to write")
     ap.add_argument("--frame-rate", type=float, default=FPS,
-                    help="the rig's frame_rate (default 7, the sequence's; tests/data/vtest_rig.yaml keeps 10, the "
-                         "rate mvtrack-detect's time constants were tuned at: see docs/detector.md)")
+                    help="the rig's frame_rate (default 7, the sequence's)")
     a = ap.parse_args(argv)
     gt = np.loadtxt(a.gt, delimiter=",")
     ok = (gt[:, 6] > 0) & (gt[:, 3] + gt[:, 5] < H - 2)
