@@ -18,8 +18,10 @@ intrinsics: frames where the board is found are kept unless blurred (the varianc
 Laplacian over the board under a third of the median's); of those, up to --max-views are chosen
 for coverage of the picture (a 4 x 4 grid) and of tilts (the board's normal in 30-degree bins); a
 view the fit leaves over three times the median error (and over 1 px) is dropped and the fit redone.
-OpenCV's model with 5 coefficients (8 with --rational). Prints the RMS, each view's error, and the
-picture's cells no view covered.
+OpenCV's model with 5 coefficients (8 with --rational); the highest radial terms (k3, and k4-k6
+with --rational) are fitted only when the Bayesian information criterion of the residuals asks
+for them (otherwise zero: they bend the model at the rim, beyond the boards). Prints the RMS, each
+view's error, and the picture's cells no view covered.
 
 extrinsics: cv2.solvePnP (SQPNP) refined by Levenberg-Marquardt. Prints the reprojection error in
 pixels and, for points on the floor (z = 0), the error in metres on the floor.
@@ -220,9 +222,9 @@ def intrinsics(a) -> dict:
     views = choose_views(sharp, w, h, a.max_views)
     if len(views) < 3:
         raise CalibError(f"too few views of the board: {len(views)} (3 or more, from different angles)")
-    flags = cv2.CALIB_RATIONAL_MODEL if a.rational else 0
+    base = cv2.CALIB_RATIONAL_MODEL if a.rational else 0
 
-    def solve(vs):
+    def solve_with(vs, flags):
         rms_, K_, dist_, rvecs_, tvecs_ = cv2.calibrateCamera([v["obj"] for v in vs], [v["img"] for v in vs], (w, h),
                                                               None, None, flags=flags)
         errs = []
@@ -230,6 +232,20 @@ def intrinsics(a) -> dict:
             p, _ = cv2.projectPoints(v["obj"], r, t, K_, dist_)
             errs.append(float(np.sqrt(np.mean(np.sum((p.reshape(-1, 2) - v["img"]) ** 2, axis=1)))))
         return rms_, K_, dist_, errs
+
+    def solve(vs):
+        """The lens's highest radial term (k3; k4-k6 too with --rational) only where the views ask
+        for it: it bends the model most at the picture's rim, beyond the boards' reach, and a term
+        the data do not need extrapolates there by up to a pixel. It is kept when it lowers the
+        Bayesian information criterion of the reprojection residuals (2 n ln RMS + k ln 2n over n
+        corners: each coefficient must buy its ln 2n)."""
+        n = sum(len(v["img"]) for v in vs)
+        fixed = base | cv2.CALIB_FIX_K3 | (cv2.CALIB_FIX_K4 | cv2.CALIB_FIX_K5 | cv2.CALIB_FIX_K6 if a.rational else 0)
+        r_free, r_fix = solve_with(vs, base), solve_with(vs, fixed)
+        extra = 4 if a.rational else 1
+        bic_free = 2 * n * np.log(r_free[0]) + extra * np.log(2 * n)
+        bic_fix = 2 * n * np.log(r_fix[0])
+        return r_free if bic_free < bic_fix else r_fix
 
     rms, K, dist, per_view = solve(views)
     # a view the model cannot fit (corners found in the wrong order, a board that bent) is dropped
