@@ -443,7 +443,29 @@ void Detector::process(const cv::Mat &bgr, Result &out)
     cv::morphologyEx(fg_, tmp_, cv::MORPH_OPEN, open_kernel_);
     cv::morphologyEx(tmp_, fg_, cv::MORPH_CLOSE, close_kernel_);
 
+    if (selective) {
+        judged_ = cv::Mat::zeros(small_.size(), CV_8U);
+    }
     find_blobs(out, selective);
+    if (selective) {
+        /* a pixel judged background (outline test) for a whole second running is learnt as it is:
+         * light that changed on a still surface is absorbed at the memory's rate. A person whose
+         * blob was misjudged for a frame or two keeps the protection of the selective update */
+        if (bg_age_.size() != small_.size()) {
+            bg_age_ = cv::Mat::zeros(small_.size(), CV_32S);
+        }
+        for (int y = 0; y < small_.rows; y++) {
+            const uint8_t *j = judged_.ptr<uint8_t>(y);
+            int32_t *a = bg_age_.ptr<int32_t>(y);
+            uint8_t *p = protect_.ptr<uint8_t>(y);
+            for (int x = 0; x < small_.cols; x++) {
+                a[x] = j[x] ? std::min<int32_t>(a[x] + 1, (int32_t)refresh) : 0;
+                if (a[x] >= refresh) {
+                    p[x] = 0;
+                }
+            }
+        }
+    }
 
     cv::compare(fg_, 0, prev_bg_, cv::CMP_EQ); /* this frame's background, for the next gain */
     if (selective) {
@@ -691,7 +713,7 @@ void Detector::find_blobs(Result &out, bool selective)
                 for (const cv::Point &p : seg) {
                     fg_.at<uint8_t>(p) = 0;
                     if (selective) {
-                        protect_.at<uint8_t>(p) = 0;
+                        judged_.at<uint8_t>(p) = 1;
                     }
                 }
                 continue;

@@ -19,7 +19,8 @@
  *  - background, not a blob: where the outline of a blob is no more an edge of the frame than of
  *    the background image (`min_outline_contrast`), what changed is the light on a still surface
  *    (a wall, a windscreen, a car roof) or a ghost of what the background learnt (a person present
- *    while it started): its pixels leave the mask and are learnt like the background's.
+ *    while it started): its pixels leave the mask, and after a second judged so they are learnt
+ *    like the background's.
  *  - a blob too small for a person at its place (area under `min_person_fraction` of the
  *    expected silhouette) is clutter and dropped; a blob whose top touches the image border has no
  *    visible head top and is dropped too (its mask still goes out).
@@ -159,6 +160,7 @@ class Detector {
     double ref_brightness_ = -1.0;   /* mean background brightness the frames are scaled to */
     cv::Mat prev_bg_;                /* last frame's background pixels (where the gain is measured) */
     cv::Mat fg_age_;                 /* frames each working pixel has been foreground (absorb_s) */
+    cv::Mat judged_, bg_age_;        /* pixels of blobs judged background this frame; frames running */
     cv::Mat bg_img_, learn_, protect_, fg_scratch_;
     cv::Mat gray_f_, gray_b_, inside_; /* outline contrast, per blob */
 };
