@@ -210,6 +210,18 @@ mvt_err_t mvt_body_feet_innovation(const mvt_tracker_t *self, const mvt_cv_state
     return mvt_pkf_innovation_from(&p, &m, NULL, in);
 }
 
+/* Whether some camera's picture shows the head at x. */
+static int in_some_picture(const mvt_tracker_t *self, const mvt_real x[3])
+{
+    for (int k = 0; k < self->num_cameras; k++) {
+        mvt_real uv[2];
+        if (mvt_cam_project(&self->cams[k], x, uv, NULL) == MVT_OK && mvt_body_in_picture(&self->cams[k], uv)) {
+            return 1;
+        }
+    }
+    return 0;
+}
+
 void mvt_body_existence(mvt_tracker_t *self, mvt_real dt)
 {
     const mvt_tracker_config_t *c = &self->cfg;
@@ -222,8 +234,10 @@ void mvt_body_existence(mvt_tracker_t *self, mvt_real dt)
             continue;
         }
         const mvt_real *x = tr->s.x;
-        const int near_wall = mvt_body_near_side_wall(c, x);
-        const mvt_real hazard = MVT_R(1.0) / c->stay_s + (near_wall ? MVT_R(1.0) / c->exit_s : MVT_R(0.0));
+        /* a person leaves the watched region through a side wall of the volume or through the
+         * edge of every camera's picture (cameras that watch part of a larger space) */
+        const int leaving = mvt_body_near_side_wall(c, x) || !in_some_picture(self, x);
+        const mvt_real hazard = MVT_R(1.0) / c->stay_s + (leaving ? MVT_R(1.0) / c->exit_s : MVT_R(0.0));
         const mvt_real ps = MVT_EXP(-dt * hazard);
         /* r' = ps r: odds' = ps r / (1 - ps r) = ps / ((1 - ps) (1 + odds^-1) + ps odds^-1 ... ), written
          * with 1 - r = 1 / (1 + e^lo) so that a track near certainty keeps its precision in float */
