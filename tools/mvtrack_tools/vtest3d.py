@@ -1,5 +1,6 @@
 """Real footage in 3D: vtest.avi (PETS 2009 S2.L1 view 1) through mvtrack-detect and mvtrackd with one
-camera, scored on the ground plane against the public ground truth (../shared/data/pets09_s2l1_gt.txt).
+camera, scored on the ground plane against the public ground truth (--gt FILE: the 2D MOT 2015
+annotation's gt.txt of PETS09-S2L1; by default the project's reference data beside the repository).
 
 1. The camera: calibrated from the ground truth's own world points (mvtrack_tools.vtest_rig: each
    annotated box's bottom-centre is a person's feet on the floor at the annotated world x, y;
@@ -40,10 +41,10 @@ def load_gt(path: Path) -> np.ndarray:
     return a[:, :9]
 
 
-def fit_rig(out: Path) -> dict:
+def fit_rig(out: Path, gt_path: Path = GT) -> dict:
     """The camera from the annotation's feet (mvtrack_tools.vtest_rig, through tools/mvtrack calibrate
     extrinsics --fit-focal), frame_rate 7."""
-    p = subprocess.run([sys.executable, "-m", "mvtrack_tools.vtest_rig", "--gt", str(GT), "--out", str(out),
+    p = subprocess.run([sys.executable, "-m", "mvtrack_tools.vtest_rig", "--gt", str(gt_path), "--out", str(out),
                         "--frame-rate", str(FPS)], capture_output=True, text=True)
     if p.returncode != 0:
         raise SystemExit(f"vtest3d: {p.stderr.strip()}")
@@ -98,6 +99,7 @@ def clear_mot(gt: np.ndarray, tracks: dict[int, list], frames: range) -> dict:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="mvtrack vtest3d", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--gt", type=Path, default=GT, help="the annotation, MOT 2015 gt.txt form")
     ap.add_argument("--out", type=Path, default=Path("out/vtest3d"))
     ap.add_argument("--daemon-args", default="", metavar="ARGS", help="more mvtrackd options")
     ap.add_argument("--detect-args", default="", metavar="ARGS", help="more mvtrack-detect options")
@@ -105,12 +107,12 @@ def main(argv: list[str] | None = None) -> int:
     a = ap.parse_args(argv)
     if not VTEST.exists():
         ap.error(f"{VTEST} is missing: tools/mvtrack setup installs opencv-doc")
-    if not GT.exists():
-        ap.error(f"{GT} is missing")
+    if not a.gt.is_file():
+        ap.error(f"no annotation file {a.gt} (--gt FILE)")
     a.out.mkdir(parents=True, exist_ok=True)
-    gt = load_gt(GT)
+    gt = load_gt(a.gt)
     rig = a.out / "rig.yaml"
-    cal = fit_rig(rig)
+    cal = fit_rig(rig, a.gt)
     det = a.out / "detections.lcm"
     t0 = 1_700_000_000_000_000
     subprocess.run([str(BUILD / "bin" / "mvtrack-detect"), "--rig", str(rig), "--video", f"view1={VTEST}",

@@ -5,7 +5,9 @@ Runs build/bin/mvtrack-detect on the video with the rig fitted to it (tests/data
 see vtest_rig.py; masks and colour on, one core) and, with --peers, the textbook pipelines of
 vtest_peers.py on the same frames. Every detector is scored the same way, frame by frame:
 
-- truth gt (default): the 2D MOT 2015 annotation of the sequence (../shared/data/vtest_gt.json);
+- truth gt (default): the 2D MOT 2015 annotation of the sequence as head points per frame (--gt
+  FILE, the JSON form {"frames": {"F": [[id, u, v, left, top, width, height, flag], ...]}}; by
+  default the project's reference data beside the repository, data/vtest_gt.json);
   a head is a box's top-centre. Boxes the benchmark flags 0 are don't-care: their heads are not
   required and a detection inside one (15 px margin) is not false. Frames 20-794 are scored
   (frames 0-19: the background's start-up), split into 20-399 (where the detector is developed)
@@ -67,12 +69,12 @@ def unannotated(u: float, bottom: float) -> bool:
     return (u < 430.0 and bottom < 145.0 - 15.0 * u / 420.0) or (u >= 720.0 and bottom < 110.0)
 
 
-def load_truth(kind: str) -> dict[int, list]:
+def load_truth(kind: str, gt_path: Path = GT_JSON) -> dict[int, list]:
     """frame -> [(u, v, box or None, required)]"""
     if kind == "hand":
         d = json.loads(LABELS.read_text())
         return {int(k): [(u, v, None, True) for u, v, _ in people] for k, people in d["frames"].items()}
-    d = json.loads(GT_JSON.read_text())
+    d = json.loads(Path(gt_path).read_text())
     return {int(k): [(u, v, (left, top, left + w, top + h), bool(c) and not behind_sign(u, v))
                      for _, u, v, left, top, w, h, c in people]
             for k, people in d["frames"].items()}
@@ -224,6 +226,7 @@ def main(argv: list[str] | None = None) -> int:
                     help="gt: the public annotation of every frame (default); hand: 32 hand-labelled heads")
     ap.add_argument("--peers", nargs="*", choices=PEERS, metavar="PEER",
                     help=f"also run the textbook detectors ({', '.join(PEERS)}; all when none is named)")
+    ap.add_argument("--gt", type=Path, default=GT_JSON, help="the annotation as head points per frame (JSON)")
     ap.add_argument("--radius", type=float, default=15.0, help="head match radius, px (default 15)")
     ap.add_argument("--plot", type=Path, help="write recall and false blobs over the sequence here (PNG)")
     ap.add_argument("--image", type=Path, help="write one frame with mvtrack-detect's blobs and the truth here")
@@ -235,13 +238,14 @@ def main(argv: list[str] | None = None) -> int:
     if not VTEST.exists():
         print(f"mvtrack vtest: {VTEST} is missing: tools/mvtrack setup installs opencv-doc", file=sys.stderr)
         return 2
-    if a.truth == "gt" and not GT_JSON.exists():
-        print(f"mvtrack vtest: {GT_JSON} is missing (use --truth hand for the project's own labels)", file=sys.stderr)
+    if a.truth == "gt" and not a.gt.is_file():
+        print(f"mvtrack vtest: no annotation file {a.gt} (--gt FILE, or --truth hand for the project's own labels)",
+              file=sys.stderr)
         return 2
     if not (a.radius > 0):
         print("mvtrack vtest: --radius must be > 0", file=sys.stderr)
         return 2
-    truth = load_truth(a.truth)
+    truth = load_truth(a.truth, a.gt)
     gt = a.truth == "gt"
     frames = sorted(f for f in truth if f >= FIRST) if gt else sorted(truth)
     parts = {"all": frames}

@@ -1,5 +1,5 @@
 """The real camera of vtest.avi (PETS 2009 S2.L1 view 1, Debian's opencv-doc), calibrated from the
-public ground truth's world points (../shared/data/pets09_s2l1_gt.txt: each annotated person's box
+public ground truth's world points (--gt FILE, the 2D MOT 2015 gt.txt of PETS09-S2L1: each annotated person's box
 bottom-centre is their feet, on the floor at the annotated world x, y).
 
 The video comes without a calibration. Every annotated box the benchmark counts (flag 1) whose
@@ -10,7 +10,7 @@ and metres, its volume the annotated people's floor area widened by 2 m, frame_r
 sequence's, as 2D MOT 2015 gives it). As a physical check the rig's people heights are printed:
 each box's top-centre ray against the vertical over its feet.
 
-    tools/mvtrack python -m mvtrack_tools.vtest_rig [--gt ../shared/data/pets09_s2l1_gt.txt] --out RIG.yaml
+    tools/mvtrack python -m mvtrack_tools.vtest_rig [--gt gt.txt] --out RIG.yaml
 """
 from __future__ import annotations
 
