@@ -108,9 +108,54 @@ int mvt_body_touch(const mvt_real a[5], const mvt_real b[5])
 
 int mvt_body_on_body_below_head(const mvt_real axis[5], const mvt_real uv[2])
 {
-    const mvt_real len = MVT_SQRT((axis[2] - axis[0]) * (axis[2] - axis[0]) + (axis[3] - axis[1]) * (axis[3] - axis[1]));
-    return uv[1] >= axis[1] + MVT_BODY_FRAGMENT_BELOW * len && uv[1] <= axis[3] + axis[4] &&
+    /* along the axis from the head toward the feet (which lie above the head in the picture of a
+     * camera that looks down on the body's far side), past the head's share, up to the feet */
+    const mvt_real ab[2] = {axis[2] - axis[0], axis[3] - axis[1]};
+    const mvt_real len2 = ab[0] * ab[0] + ab[1] * ab[1];
+    if (!(len2 > MVT_R(0.0))) {
+        return 0;
+    }
+    const mvt_real len = MVT_SQRT(len2);
+    const mvt_real s = ((uv[0] - axis[0]) * ab[0] + (uv[1] - axis[1]) * ab[1]) / len2;
+    return s >= MVT_BODY_FRAGMENT_BELOW && s <= MVT_R(1.0) + axis[4] / len &&
            point_seg_d2(uv, axis, axis + 2) <= axis[4] * axis[4];
+}
+
+int mvt_body_fragment_of(const mvt_camera_t *cam, const mvt_real axis[5], const mvt_real x[3], const mvt_real uv[2])
+{
+    if (mvt_body_on_body_below_head(axis, uv)) {
+        return 1;
+    }
+    /* the floor near the feet: the top's ray meets the floor within MVT_BODY_SHADOW_M of them */
+    mvt_real o[3], dir[3];
+    if (mvt_cam_ray(cam, uv, o, dir) != MVT_OK || !(dir[2] < MVT_R(-1e-3)) || !(o[2] > MVT_R(0.0))) {
+        return 0;
+    }
+    const mvt_real tf = -o[2] / dir[2];
+    const mvt_real dx = o[0] + tf * dir[0] - x[0], dy = o[1] + tf * dir[1] - x[1];
+    return dx * dx + dy * dy <= MVT_BODY_SHADOW_M * MVT_BODY_SHADOW_M;
+}
+
+mvt_real mvt_body_silhouette_area(const mvt_tracker_t *self, const mvt_camera_t *cam, const mvt_real axis[5],
+                                   const mvt_real x[3])
+{
+    const mvt_real w = axis[4];
+    const mvt_real len = MVT_SQRT((axis[2] - axis[0]) * (axis[2] - axis[0]) + (axis[3] - axis[1]) * (axis[3] - axis[1]));
+    mvt_real area = MVT_R(2.0) * w * len + MVT_R(3.14159265) * w * w;
+    const mvt_real feet[3] = {x[0], x[1], MVT_R(0.0)};
+    const mvt_real depth = mvt_cam_depth(cam, feet);
+    if (depth > MVT_R(0.0)) {
+        const mvt_real r = cam->fx * MVT_BODY_SHADOW_M / depth;
+        area += MVT_R(3.14159265) * r * r;
+    }
+    (void)self;
+    return area > MVT_R(1.0) ? area : MVT_R(1.0);
+}
+
+int mvt_body_on_silhouette(const mvt_real axis[5], const mvt_real uv[2], mvt_real slack_px)
+{
+    const mvt_real w = axis[4] + slack_px;
+    return point_seg_d2(uv, axis, axis + 2) <= w * w;
 }
 
 mvt_real mvt_body_head_density(const mvt_tracker_t *self, const mvt_pkf_innov_t *in)
@@ -262,11 +307,34 @@ static void learn_clutter(mvt_tracker_t *self, int k, mvt_real dt)
     self->clutter_n[k] = c < lo ? lo : c;
 }
 
+/* Camera k's fragments per body likely present, learnt from this frame's explanations. */
+static void learn_fragments(mvt_tracker_t *self, int k, mvt_real dt)
+{
+    const mvt_body_ws_t *ws = &self->body;
+    int bodies = 0, frags = 0;
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        bodies += self->tracks[t].id != 0 && !self->tracks[t].dormant && self->tracks[t].exist_lo > MVT_R(0.0) &&
+                  ws->axis[k][t][4] > MVT_R(0.0) && mvt_body_in_picture(&self->cams[k], ws->axis[k][t]);
+    }
+    for (int d = 0; d < self->num_meas[k]; d++) {
+        frags += ws->owner[d] >= 0 && ws->head_of[k][d] < 0;
+    }
+    if (bodies == 0 || !(dt > MVT_R(0.0))) {
+        return;
+    }
+    const mvt_real a = MVT_R(1.0) - MVT_EXP(-dt * (mvt_real)bodies / MVT_BODY_CLUTTER_S);
+    const mvt_real f = self->frag_n[k] + a * ((mvt_real)frags / (mvt_real)bodies - self->frag_n[k]);
+    self->frag_n[k] = f < MVT_BODY_FRAGMENTS_MIN ? MVT_BODY_FRAGMENTS_MIN : f;
+}
+
 void mvt_body_step(mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order, mvt_real dt)
 {
     for (int k = 0; k < self->num_cameras; k++) {
         if (!(self->clutter_n[k] > MVT_R(0.0))) {
             self->clutter_n[k] = self->cfg.clutter_per_frame;
+        }
+        if (!(self->frag_n[k] > MVT_R(0.0))) {
+            self->frag_n[k] = MVT_BODY_FRAGMENTS_PRIOR;
         }
         for (int t = 0; t < MVT_MAX_TARGETS; t++) {
             self->body.sil[k][t][0] = MVT_R(1.0);
@@ -288,10 +356,11 @@ void mvt_body_step(mvt_tracker_t *self, const mvt_frame_t *frame, const int orde
                 mvt_trk_predict_pos(self, &self->tracks[t], view->utime_us);
             }
         }
-        mvt_body_visibility(self, k);
+        mvt_body_visibility(self, view, k);
         mvt_body_explain(self, view, k);
         mvt_body_update(self, view, k, dt);
         learn_clutter(self, k, dt);
+        learn_fragments(self, k, dt);
     }
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         if (self->tracks[t].id != 0) {

@@ -72,6 +72,18 @@
  * blob at the head's own height beside it is not the body's). */
 #define MVT_BODY_FRAGMENT_BELOW MVT_R(0.08)
 
+/* How far from the feet (m) a person's shadow or reflection on the floor reaches: background
+ * subtraction keeps it as foreground, attached to the body's blob or a blob of its own. */
+#define MVT_BODY_SHADOW_M MVT_R(0.7)
+
+/* The blobs a body's silhouette (with its shadow) breaks into per camera and frame besides the one
+ * its head tops (holes, cuts, clothes the colour of the background, a shadow apart), anywhere on
+ * the silhouette (mvt_body_fragment_of): a running mean over MVT_BODY_CLUTTER_S of each camera's
+ * fragments per body likely present, from this prior, never under the floor (a segmentation that
+ * has not broken a body for a while still may). */
+#define MVT_BODY_FRAGMENTS_PRIOR MVT_R(0.3)
+#define MVT_BODY_FRAGMENTS_MIN MVT_R(0.01)
+
 /* Probability p in (0, 1) as log odds, and back. */
 mvt_real mvt_body_logit(mvt_real p);
 mvt_real mvt_body_prob(mvt_real lo);
@@ -93,6 +105,20 @@ int mvt_body_touch(const mvt_real a[5], const mvt_real b[5]);
 /* Image point uv lies on the silhouette (within its half width of the axis) and at least
  * MVT_BODY_FRAGMENT_BELOW of the axis' length below the head: a fragment's top. */
 int mvt_body_on_body_below_head(const mvt_real axis[5], const mvt_real uv[2]);
+
+/* Image point uv, a blob's top, is a fragment of the body with head x and silhouette axis (both
+ * in camera cam): on the body below the head (mvt_body_on_body_below_head), or on the floor within
+ * MVT_BODY_SHADOW_M of the feet (the body's shadow or reflection, which background subtraction
+ * keeps as foreground and which, seen from above, may be the top of the body's blob). */
+int mvt_body_fragment_of(const mvt_camera_t *cam, const mvt_real axis[5], const mvt_real x[3], const mvt_real uv[2]);
+
+/* The area (px^2) over which the fragments of the body with head x and silhouette axis lie in
+ * camera cam: the thickened axis and the floor within MVT_BODY_SHADOW_M of the feet. */
+mvt_real mvt_body_silhouette_area(const mvt_tracker_t *self, const mvt_camera_t *cam, const mvt_real axis[5],
+                                   const mvt_real x[3]);
+
+/* Image point uv lies on the silhouette: within its half width and slack_px of the axis. */
+int mvt_body_on_silhouette(const mvt_real axis[5], const mvt_real uv[2], mvt_real slack_px);
 
 /* The head x lies within exit_margin_m of the volume's side walls: where people leave. */
 int mvt_body_near_side_wall(const mvt_tracker_config_t *c, const mvt_real x[3]);
@@ -132,7 +158,7 @@ mvt_real mvt_body_head_density(const mvt_tracker_t *self, const mvt_pkf_innov_t 
 
 /* The steps (see above). */
 void mvt_body_existence(mvt_tracker_t *self, mvt_real dt);
-void mvt_body_visibility(mvt_tracker_t *self, int k);
+void mvt_body_visibility(mvt_tracker_t *self, const mvt_view_t *view, int k);
 void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k);
 void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_real dt);
 void mvt_body_one_view(mvt_tracker_t *self, const mvt_frame_t *frame);

@@ -206,7 +206,8 @@ static int admissible(const mvt_tracker_t *self, const mvt_frame_t *frame, const
     const mvt_real uv[2] = {det->u, det->v};
     for (int i = 0; i < n_born; i++) {
         mvt_real axis[5];
-        if (mvt_body_axis(self, &self->cams[k], self->tracks[born[i]].s.x, axis) && mvt_body_on_body_below_head(axis, uv)) {
+        if (mvt_body_axis(self, &self->cams[k], self->tracks[born[i]].s.x, axis) &&
+            mvt_body_fragment_of(&self->cams[k], axis, self->tracks[born[i]].s.x, uv)) {
             return 0;
         }
     }

@@ -19,11 +19,74 @@
  */
 #include "mvt_body.h"
 
+#include "mvt_mask.h"
+
 #include <math.h>
 #include <stddef.h>
 
 /* Gains are offset by this constant to make the solver's costs non-negative (it forbids < 0). */
 #define GAIN_OFFSET MVT_R(1000.0)
+
+/* Half a head's width (m): the band of image columns searched for a head's top. */
+#define TOP_HEAD_HALFWIDTH_M MVT_R(0.11)
+/* A head's top is narrower than this (m) in its first mask rows; a wider top is a shoulder line or
+ * two heads side by side, and says nothing of one head's column. */
+#define TOP_MAX_WIDTH_M MVT_R(0.3)
+/* Above a head's top the picture is background for this far (m) at its depth: a torso fragment
+ * under a hole in the mask, or a bump of a shoulder, has the head above it. */
+#define TOP_CLEAR_M MVT_R(0.3)
+/* An outline has bumps a head's width apart (shoulders, arms, a neighbour's head), so a top is
+ * taken for the head only nearer its prediction than a blob is: chi-square 2 dof, 99 %. */
+#define TOP_GATE_CHI2 MVT_R(9.21)
+
+/* Track t, likely present, with no blob of camera k for its head: where the camera sent its
+ * foreground mask, the head is the mask's top in its own column when there is one (a blob reports
+ * one top, the top-most of the region, so the head of a person merged with another, or cut from
+ * its body by a hole, is in no blob's point but stands out of the outline). The top must be no
+ * blob's reported point (association had its say) and on no other likely-present body's
+ * silhouette (where the outline is that body's). Fills ws->top[t]; 1 when found. */
+static int mask_head(mvt_tracker_t *self, const mvt_view_t *view, int k, int t)
+{
+    const mvt_camera_t *cam = &self->cams[k];
+    const mvt_track_t *tr = &self->tracks[t];
+    mvt_body_ws_t *ws = &self->body;
+    mvt_pkf_pred_t p;
+    if (view->mask == NULL || view->mask->width < 1 || tr->s.x[2] < MVT_TRK_MIN_HEAD_M ||
+        mvt_pkf_predict_obs(&tr->s, cam, MVT_PKF_JACOBIAN, &p) != MVT_OK) {
+        return 0;
+    }
+    const mvt_real s = (mvt_real)view->mask->scale;
+    const mvt_real sig2 = cam->sigma_px * cam->sigma_px + s * s; /* the detector's noise and a mask pixel */
+    const mvt_real sig = MVT_SQRT(sig2);
+    const mvt_real su = MVT_SQRT(p.hph[0] + sig2), sv = MVT_SQRT(p.hph[2] + sig2);
+    const mvt_real px_per_m = cam->fx / p.depth_m;
+    mvt_real uv[2];
+    if (!mvt_mask_fg_near(view->mask, p.h, MVT_R(3.0) * su) ||
+        !mvt_mask_top_in_band(view->mask, p.h[0], px_per_m * TOP_HEAD_HALFWIDTH_M + su, p.h[1] - MVT_R(3.0) * sv,
+                              p.h[1] + MVT_R(3.0) * sv, px_per_m * TOP_MAX_WIDTH_M + MVT_R(2.0) * s,
+                              px_per_m * TOP_CLEAR_M, uv)) {
+        return 0;
+    }
+    for (int d = 0; d < self->num_meas[k]; d++) {
+        const mvt_real du = uv[0] - view->det[d].u, dv = uv[1] - view->det[d].v;
+        const mvt_real var = self->meas_ok[k][d] ? self->meas[k][d].var_px2 : sig2;
+        if (du * du + dv * dv < MVT_R(9.0) * (sig2 + var)) {
+            return 0;
+        }
+    }
+    for (int j = 0; j < MVT_MAX_TARGETS; j++) {
+        if (j != t && self->tracks[j].id != 0 && self->pred_ok[j] && self->tracks[j].exist_lo > MVT_R(0.0) &&
+            mvt_body_on_silhouette(ws->axis[k][j], uv, sig)) {
+            return 0;
+        }
+    }
+    mvt_pkf_innov_t in;
+    if (mvt_pkf_meas_make(cam, uv, sig, &ws->top[t]) != MVT_OK ||
+        mvt_pkf_innovation_from(&self->pred[t], &ws->top[t], NULL, &in) != MVT_OK || !(in.d2 <= TOP_GATE_CHI2)) {
+        return 0;
+    }
+    return 1;
+}
 
 void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k)
 {
@@ -35,6 +98,7 @@ void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k)
         ws->assign[t] = -1;
         ws->frag[t] = -1;
         ws->host[t] = -1;
+        ws->top_ok[t] = 0;
         if (self->tracks[t].id != 0 && self->pred_ok[t]) {
             rows[nr++] = (int16_t)t;
         }
@@ -53,6 +117,22 @@ void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k)
         ws->clutter_now[k] = sent > shown ? (mvt_real)(sent - shown) : MVT_R(0.0);
     }
     const mvt_real lambda = mvt_body_clutter_density(self, k);
+    /* each blob's top as a fragment of the bodies likely present that it lies on */
+    for (int d = 0; d < nd; d++) {
+        ws->frag_dens[d] = MVT_R(0.0);
+        if (!self->meas_ok[k][d]) {
+            continue;
+        }
+        const mvt_real uv[2] = {view->det[d].u, view->det[d].v};
+        for (int i = 0; i < nr; i++) {
+            const int t = rows[i];
+            const mvt_track_t *tr = &self->tracks[t];
+            if (tr->exist_lo > MVT_R(0.0) && mvt_body_fragment_of(&self->cams[k], ws->axis[k][t], tr->s.x, uv)) {
+                ws->frag_dens[d] += mvt_body_prob(tr->exist_lo) * self->frag_n[k] /
+                                    mvt_body_silhouette_area(self, &self->cams[k], ws->axis[k][t], tr->s.x);
+            }
+        }
+    }
     if (nr > 0 && nd > 0) {
         const int nc = nd + nr;
         mvt_real *cost = self->cl_cost;
@@ -75,7 +155,7 @@ void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k)
                 if (!(dens > MVT_R(0.0))) {
                     continue;
                 }
-                mvt_real gain = MVT_LOG(rp * dens / lambda) - miss;
+                mvt_real gain = MVT_LOG(rp * dens / (lambda + ws->frag_dens[d])) - miss;
                 if (!(gain > MVT_R(0.0))) {
                     continue;
                 }
@@ -104,12 +184,12 @@ void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k)
         int best = -1;
         for (int i = 0; i < nr; i++) {
             const int t = rows[i];
-            if (mvt_body_on_body_below_head(ws->axis[k][t], uv) &&
+            if (mvt_body_fragment_of(&self->cams[k], ws->axis[k][t], self->tracks[t].s.x, uv) &&
                 (best < 0 || self->tracks[t].exist_lo > self->tracks[best].exist_lo)) {
                 best = t;
             }
         }
-        if (best >= 0) {
+        if (best >= 0 && ws->frag_dens[d] >= lambda) { /* a fragment rather than clutter */
             ws->owner[d] = (int16_t)best;
             if (ws->frag[best] < 0) {
                 ws->frag[best] = (int16_t)d;
@@ -120,20 +200,33 @@ void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k)
         }
     }
     /* merged blobs: a track left without its head or a fragment whose predicted head lies in the
-     * box of a blob that the head of a body likely present tops, under that top, may be inside it */
+     * box of a blob that another body likely present explains (its head or a fragment of it tops
+     * the blob), under that top, and on the blob's foreground where the camera sent its mask, may
+     * be inside it */
+    const int masked = view->mask != NULL && view->mask->width > 0;
     for (int i = 0; i < nr; i++) {
         const int t = rows[i];
         if (ws->assign[t] >= 0 || ws->frag[t] >= 0 || !(self->tracks[t].exist_lo > MVT_R(0.0))) {
             continue; /* a track not yet likely present earns its existence from its own blobs */
         }
         const mvt_real *h = ws->head[t];
+        const mvt_real r_fg = MVT_R(3.0) * self->cams[k].sigma_px; /* the head's own pixels */
         for (int d = 0; d < nd && ws->host[t] < 0; d++) {
             const int o = ws->owner[d];
             const mvt_detection_t *det = &view->det[d];
-            if (o >= 0 && o != t && ws->assign[o] == d && self->tracks[o].exist_lo > MVT_R(0.0) && det->v <= h[1] &&
-                mvt_trk_in_box(det->box, h, MVT_R(0.0), MVT_R(0.0))) {
+            if (o >= 0 && o != t && self->tracks[o].exist_lo > MVT_R(0.0) && det->v <= h[1] &&
+                mvt_trk_in_box(det->box, h, MVT_R(0.0), MVT_R(0.0)) && (!masked || mvt_mask_fg_near(view->mask, h, r_fg))) {
                 ws->host[t] = (int16_t)d;
             }
+        }
+    }
+    /* heads that stand out of the mask where no blob reports them */
+    for (int i = 0; i < nr; i++) {
+        const int t = rows[i];
+        const int32_t st = self->tracks[t].status;
+        if (ws->assign[t] < 0 && self->tracks[t].exist_lo > MVT_R(0.0) &&
+            (st == MVT_TRACK_CONFIRMED || st == MVT_TRACK_COASTING)) {
+            ws->top_ok[t] = (uint8_t)mask_head(self, view, k, t);
         }
     }
 }

@@ -148,6 +148,21 @@ void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_rea
         }
         const mvt_real p = ws->pd[t];
         const int d = ws->assign[t];
+        if (d < 0 && ws->top_ok[t]) {
+            /* the head stands out of the mask in its own column: placed, and present */
+            mvt_pkf_innov_t in;
+            if (mvt_pkf_innovation_from(&self->pred[t], &ws->top[t], NULL, &in) != MVT_OK ||
+                mvt_trk_update_pkf(self, tr, k, &in, NULL) != MVT_OK) {
+                self->counters.numeric_faults++;
+                continue;
+            }
+            tr->cameras_used |= 1u << k;
+            if (tr->view[k].p < MVT_R(0.5)) {
+                tr->cameras_placed |= 1u << k;
+            }
+            self->counters.mask_top_updates++;
+            continue;
+        }
         if (d < 0) {
             if (ws->host[t] >= 0) {
                 tr->exist_lo += MVT_LOG(MVT_R(1.0) - p * MVT_BODY_P_SHOWN_HIDDEN);
@@ -162,7 +177,7 @@ void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_rea
         mvt_pkf_innov_t in;
         mvt_err_t err = mvt_pkf_innovation_from(&self->pred[t], &self->meas[k][d], NULL, &in);
         if (err == MVT_OK) {
-            tr->exist_lo += MVT_LOG(MVT_R(1.0) - p + p * mvt_body_head_density(self, &in) / lambda);
+            tr->exist_lo += MVT_LOG(MVT_R(1.0) - p + p * mvt_body_head_density(self, &in) / (lambda + ws->frag_dens[d]));
             if (!(in.d2 <= self->cfg.gate_chi2)) {
                 self->counters.gated_out++; /* displaced: evidence of the person, not of where */
                 continue;

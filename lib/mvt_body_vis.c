@@ -6,9 +6,15 @@
  * body (one more likely there than not) with a higher head is hidden behind it or merged into one
  * blob with it, whose reported top is the other head: its head shows as a top of its own only with
  * MVT_BODY_P_SHOWN_HIDDEN (mvt_body_shown). A head outside the picture, or behind the camera, is
- * not reported at all.
+ * not reported at all. Where the camera sent its foreground mask and the mask holds nothing near
+ * the predicted head, nothing hides the head there (a body in front of it, or one it merged with,
+ * would be foreground): it is not hidden, and is reported with p_detect.
  */
 #include "mvt_body.h"
+
+#include "mvt_mask.h"
+
+#include <math.h>
 
 #include <stddef.h>
 
@@ -27,7 +33,24 @@ mvt_real mvt_body_shown(const mvt_tracker_t *self, int k, const mvt_real axis[5]
     return shown;
 }
 
-void mvt_body_visibility(mvt_tracker_t *self, int k)
+/* Half a head's width (m): a head hidden at the predicted place has foreground this near. */
+#define VIS_HEAD_HALFWIDTH_M MVT_R(0.11)
+
+/* Camera k's mask shows background all around track t's predicted head: nothing hides it. */
+static int head_on_background(const mvt_tracker_t *self, const mvt_view_t *view, int k, int t)
+{
+    if (view->mask == NULL || view->mask->width < 1) {
+        return 0;
+    }
+    const mvt_camera_t *cam = &self->cams[k];
+    const mvt_pkf_pred_t *p = &self->pred[t];
+    const mvt_real s2 = p->hph[0] > p->hph[2] ? p->hph[0] : p->hph[2];
+    const mvt_real r = MVT_R(3.0) * cam->sigma_px + MVT_R(2.0) * MVT_SQRT(s2) +
+                       cam->fx * VIS_HEAD_HALFWIDTH_M / p->depth_m;
+    return !mvt_mask_fg_near(view->mask, self->body.head[t], r);
+}
+
+void mvt_body_visibility(mvt_tracker_t *self, const mvt_view_t *view, int k)
 {
     if (!(self->p_detect_k[k] > MVT_R(0.0))) {
         self->p_detect_k[k] = self->cfg.p_detect;
@@ -63,7 +86,7 @@ void mvt_body_visibility(mvt_tracker_t *self, int k)
         }
     }
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
-        if (ws->pd[t] > MVT_R(0.0)) {
+        if (ws->pd[t] > MVT_R(0.0) && !head_on_background(self, view, k, t)) {
             ws->pd[t] *= mvt_body_shown(self, k, ws->axis[k][t], t);
         }
     }

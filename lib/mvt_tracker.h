@@ -393,6 +393,11 @@ typedef struct mvt_body_ws {
     int16_t host[MVT_MAX_TARGETS];      /* this camera: a merged blob that holds it under another
                                            track's head, -1 */
     int16_t owner[MVT_MAX_DETECTIONS];  /* this camera: the track a detection belongs to, or -1 */
+    mvt_pkf_meas_t top[MVT_MAX_TARGETS]; /* this camera: the head as a top of the foreground mask in
+                                            its own column, where no blob is its head */
+    uint8_t top_ok[MVT_MAX_TARGETS];    /* ... found */
+    mvt_real frag_dens[MVT_MAX_DETECTIONS]; /* this camera: density (1/px^2) of the bodies' fragments
+                                               at each blob's top */
     uint8_t free_det[MVT_MAX_CAMERAS][MVT_MAX_DETECTIONS]; /* this frame: explained by no track */
     int16_t head_of[MVT_MAX_CAMERAS][MVT_MAX_DETECTIONS];  /* this frame: the track whose head the
                                                               blob is, or -1 */
@@ -471,6 +476,8 @@ typedef struct mvt_tracker {
                                             frame, learnt (mvt_body.c) */
     mvt_real p_detect_k[MVT_MAX_CAMERAS]; /* ... and its detection probability of a visible head,
                                              learnt (mvt_body_update.c); 0: not yet */
+    mvt_real frag_n[MVT_MAX_CAMERAS];     /* ... and the fragments it shows per body likely present
+                                             per frame, learnt (mvt_body.c); 0: not yet */
     mvt_body_ws_t body;         /* MVT_LIFECYCLE_BODY's workspace */
 } mvt_tracker_t;
 
@@ -512,6 +519,7 @@ typedef struct mvt_tracker_persist {
     int64_t birth_rate_us;
     mvt_real clutter_n[MVT_MAX_CAMERAS];
     mvt_real p_detect_k[MVT_MAX_CAMERAS];
+    mvt_real frag_n[MVT_MAX_CAMERAS];
 } mvt_tracker_persist_t;
 
 /* Copies the persistent part of the tracker into out (padding zeroed: equal states give equal
