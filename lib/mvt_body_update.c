@@ -114,6 +114,78 @@ static void keep_in_blob(mvt_tracker_t *self, mvt_track_t *tr, int k, const mvt_
     }
 }
 
+/* How much a silhouette's edge varies about the body's (arms, clothes, pose), m at its depth. */
+#define EXTENT_SD_M MVT_R(0.05)
+
+/* ln of the likelihood ratio of box edge e about a (with the track's body) or about b (without):
+ * Gaussian with variance s2 where the silhouette is whole, anywhere over n pixels with probability
+ * q where the segmentation broke it (a cut or a hole moves an edge anywhere). */
+static mvt_real edge_llr(mvt_real e, mvt_real a, mvt_real b, mvt_real s2, mvt_real q, mvt_real n)
+{
+    const mvt_real g = (MVT_R(1.0) - q) / MVT_SQRT(MVT_R(2.0) * MVT_R(3.14159265) * s2), u = q / n;
+    const mvt_real la = g * MVT_EXP(MVT_R(-0.5) * (e - a) * (e - a) / s2) + u;
+    const mvt_real lb = g * MVT_EXP(MVT_R(-0.5) * (e - b) * (e - b) / s2) + u;
+    return MVT_LOG(la / lb);
+}
+
+/* Track t hosted by blob d of camera k: the blob's box is the union of the silhouettes of the people
+ * in it. Its left, right and bottom edges predicted from the other likely-present bodies whose heads
+ * the box holds, with and without t's silhouette, each with the blob's noise, EXTENT_SD_M at t's
+ * depth and t's predicted spread: the log-likelihood ratio of t in the blob against t absent. > 0
+ * where the box reaches out where only t's body puts it (a person beside or in front of the one
+ * whose top the blob reports), < 0 where t's body would stick out of it, 0 where the others fill
+ * t's silhouette either way (right behind another: no information). Edges at the picture's border,
+ * where the box is cut, say nothing. */
+static mvt_real extent_llr(const mvt_tracker_t *self, const mvt_view_t *view, int k, int t, int d)
+{
+    const mvt_camera_t *cam = &self->cams[k];
+    const mvt_body_ws_t *ws = &self->body;
+    const mvt_real *b = view->det[d].box, *sil_t = ws->sil[k][t];
+    const mvt_pkf_pred_t *p = &self->pred[t];
+    if (!mvt_trk_box_ok(b) || !(sil_t[2] > sil_t[0]) || !(p->depth_m > MVT_R(0.0))) {
+        return MVT_R(0.0);
+    }
+    mvt_real all[4] = {MVT_R(0.0), MVT_R(0.0), MVT_R(0.0), MVT_R(0.0)};
+    int n = 0;
+    for (int j = 0; j < MVT_MAX_TARGETS; j++) {
+        const mvt_real *sj = ws->sil[k][j];
+        if (j == t || self->tracks[j].id == 0 || self->tracks[j].dormant || !(self->tracks[j].exist_lo > MVT_R(0.0)) ||
+            !(sj[2] > sj[0]) || !mvt_trk_in_box(b, ws->axis[k][j], MVT_R(0.0), MVT_R(0.0))) {
+            continue;
+        }
+        if (n++ == 0) {
+            all[0] = sj[0];
+            all[2] = sj[2];
+            all[3] = sj[3];
+        } else {
+            all[0] = sj[0] < all[0] ? sj[0] : all[0];
+            all[2] = sj[2] > all[2] ? sj[2] : all[2];
+            all[3] = sj[3] > all[3] ? sj[3] : all[3];
+        }
+    }
+    if (n == 0) {
+        return MVT_R(0.0);
+    }
+    const mvt_real wsd = cam->fx * EXTENT_SD_M / p->depth_m;
+    const mvt_real var = self->meas_ok[k][d] ? self->meas[k][d].var_px2 : cam->sigma_px * cam->sigma_px;
+    const mvt_real s2u = var + wsd * wsd + p->hph[0], s2v = var + wsd * wsd + p->hph[2];
+    /* the chance that an edge is the segmentation's, not the body's: this camera's fragments per body */
+    const mvt_real fq = self->frag_n[k] < MVT_R(0.9) ? self->frag_n[k] : MVT_R(0.9);
+    const mvt_real q = fq > MVT_BODY_FRAGMENTS_MIN ? fq : MVT_BODY_FRAGMENTS_MIN;
+    const mvt_real W = (mvt_real)cam->width, H = (mvt_real)cam->height;
+    mvt_real llr = MVT_R(0.0);
+    if (b[0] > MVT_BODY_EDGE_PX && sil_t[0] < all[0]) {
+        llr += edge_llr(b[0], sil_t[0], all[0], s2u, q, W);
+    }
+    if (b[2] < W - MVT_R(1.0) - MVT_BODY_EDGE_PX && sil_t[2] > all[2]) {
+        llr += edge_llr(b[2], sil_t[2], all[2], s2u, q, W);
+    }
+    if (b[3] < H - MVT_R(1.0) - MVT_BODY_EDGE_PX && sil_t[3] > all[3]) {
+        llr += edge_llr(b[3], sil_t[3], all[3], s2v, q, H);
+    }
+    return llr;
+}
+
 /* Learns camera k's detection probability from this frame: each track likely present whose head
  * the model expects to be shown (no body over it) is a trial, its head's blob a hit. */
 static void learn_detection(mvt_tracker_t *self, int k, mvt_real dt)
@@ -165,7 +237,7 @@ void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_rea
         }
         if (d < 0) {
             if (ws->host[t] >= 0) {
-                tr->exist_lo += MVT_LOG(MVT_R(1.0) - p * MVT_BODY_P_SHOWN_HIDDEN);
+                tr->exist_lo += MVT_LOG(MVT_R(1.0) - p * MVT_BODY_P_SHOWN_HIDDEN) + extent_llr(self, view, k, t, ws->host[t]);
                 keep_in_blob(self, tr, k, &view->det[ws->host[t]]);
             } else if (ws->frag[t] >= 0) {
                 keep_in_blob(self, tr, k, &view->det[ws->frag[t]]); /* the piece holds the body's column */
