@@ -28,6 +28,8 @@
 #include "mvt_body.h"
 
 #include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 static mvt_real dot3(const mvt_real a[3], const mvt_real b[3])
@@ -216,11 +218,13 @@ static int admissible(const mvt_tracker_t *self, const mvt_frame_t *frame, const
 
 /* A track whose person is less likely there than not (it keeps its label while its existence lasts),
  * or a dormant one (mvt_body_prune.c), and whose estimate the candidate could be, within the 3-dof gate of both covariances: the
- * candidate is that person found again, not a new one. The nearest, or -1. */
+ * candidate is that person found again, not a new one. The estimate's covariance grows by walking
+ * pace's reach since a camera last placed the head. The likeliest (existence times the candidate's
+ * density under the estimate), or -1. */
 static int heir_of(const mvt_tracker_t *self, const mvt_body_cand_t *cand)
 {
     int best = -1;
-    mvt_real best_d2 = MVT_TRK_GATE3;
+    mvt_real best_score = MVT_R(0.0);
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         const mvt_track_t *tr = &self->tracks[t];
         if (tr->id == 0 || (tr->exist_lo > MVT_R(0.0) && !tr->dormant)) {
@@ -228,19 +232,28 @@ static int heir_of(const mvt_tracker_t *self, const mvt_body_cand_t *cand)
         }
         mvt_real P[9] = {tr->s.P[0], tr->s.P[1], tr->s.P[2], tr->s.P[6], tr->s.P[7],
                          tr->s.P[8], tr->s.P[12], tr->s.P[13], tr->s.P[14]};
-        if (tr->dormant) {
-            /* asleep, nobody saw where the person walked: walking pace's reach over that time (at
-             * least half a second's, the time it takes to fall asleep) */
+        {
+            /* since no camera placed the head (hidden, asleep), nobody saw where the person walked:
+             * walking pace's reach over that time (asleep: at least half a second's, the time it
+             * takes to fall asleep) */
             mvt_real since = mvt_us_to_s(self->last_utime_us - tr->last_update_us);
-            since = since > MVT_R(0.5) ? since : MVT_R(0.5);
+            since = since > MVT_R(0.5) || !tr->dormant ? since : MVT_R(0.5);
             const mvt_real reach = self->cfg.init_vel_std_ms * since;
             P[0] += reach * reach;
             P[4] += reach * reach;
         }
-        const mvt_real d2 = mvt_trk_mahalanobis3(tr->s.x, P, cand->x, cand->P, NULL);
-        if (d2 >= MVT_R(0.0) && d2 < best_d2) {
+        mvt_real det;
+        const mvt_real d2 = mvt_trk_mahalanobis3(tr->s.x, P, cand->x, cand->P, &det);
+        if (getenv("DBGID") && tr->id == atoi(getenv("DBGID"))) fprintf(stderr, "HEIR t%lld id %d x %.2f %.2f %.2f cand %.2f %.2f %.2f d2 %.2f P %.3f %.3f lo %.2f since %.2f dorm %d\n", (long long)self->last_utime_us, tr->id, (double)tr->s.x[0], (double)tr->s.x[1], (double)tr->s.x[2], (double)cand->x[0], (double)cand->x[1], (double)cand->x[2], (double)d2, (double)P[0], (double)P[4], (double)tr->exist_lo, (double)mvt_us_to_s(self->last_utime_us - tr->last_update_us), tr->dormant);
+        if (!(d2 >= MVT_R(0.0)) || !(d2 < MVT_TRK_GATE3) || !(det > MVT_R(0.0))) {
+            continue;
+        }
+        /* the likeliest: the track's chance of being a person there (its existence) times the
+         * candidate's density under it */
+        const mvt_real score = mvt_body_prob(tr->exist_lo) * MVT_EXP(MVT_R(-0.5) * d2) / MVT_SQRT(det);
+        if (best < 0 || score > best_score) {
             best = t;
-            best_d2 = d2;
+            best_score = score;
         }
     }
     return best;
