@@ -152,6 +152,17 @@ mvt_real mvt_body_silhouette_area(const mvt_tracker_t *self, const mvt_camera_t 
     return area > MVT_R(1.0) ? area : MVT_R(1.0);
 }
 
+mvt_real mvt_body_fragment_density(const mvt_tracker_t *self, int k, int t, const mvt_real uv[2])
+{
+    const mvt_track_t *tr = &self->tracks[t];
+    const mvt_real *axis = self->body.axis[k][t];
+    if (tr->id == 0 || tr->dormant || !(tr->exist_lo > MVT_R(0.0)) || !(axis[4] > MVT_R(0.0)) ||
+        !mvt_body_fragment_of(&self->cams[k], axis, tr->s.x, uv)) {
+        return MVT_R(0.0);
+    }
+    return mvt_body_prob(tr->exist_lo) * self->frag_n[k] / mvt_body_silhouette_area(self, &self->cams[k], axis, tr->s.x);
+}
+
 int mvt_body_on_silhouette(const mvt_real axis[5], const mvt_real uv[2], mvt_real slack_px)
 {
     const mvt_real w = axis[4] + slack_px;

@@ -117,6 +117,11 @@ int mvt_body_fragment_of(const mvt_camera_t *cam, const mvt_real axis[5], const 
 mvt_real mvt_body_silhouette_area(const mvt_tracker_t *self, const mvt_camera_t *cam, const mvt_real axis[5],
                                    const mvt_real x[3]);
 
+/* The density (1/px^2) of camera k's fragments of track t's body (likely present) at image point
+ * uv: its fragments per frame (the camera's learnt rate) over its silhouette's area, times its
+ * existence; 0 off the silhouette. O(1). */
+mvt_real mvt_body_fragment_density(const mvt_tracker_t *self, int k, int t, const mvt_real uv[2]);
+
 /* Image point uv lies on the silhouette: within its half width and slack_px of the axis. */
 int mvt_body_on_silhouette(const mvt_real axis[5], const mvt_real uv[2], mvt_real slack_px);
 

@@ -125,12 +125,7 @@ void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k)
         }
         const mvt_real uv[2] = {view->det[d].u, view->det[d].v};
         for (int i = 0; i < nr; i++) {
-            const int t = rows[i];
-            const mvt_track_t *tr = &self->tracks[t];
-            if (tr->exist_lo > MVT_R(0.0) && mvt_body_fragment_of(&self->cams[k], ws->axis[k][t], tr->s.x, uv)) {
-                ws->frag_dens[d] += mvt_body_prob(tr->exist_lo) * self->frag_n[k] /
-                                    mvt_body_silhouette_area(self, &self->cams[k], ws->axis[k][t], tr->s.x);
-            }
+            ws->frag_dens[d] += mvt_body_fragment_density(self, k, rows[i], uv);
         }
     }
     if (nr > 0 && nd > 0) {
@@ -155,7 +150,7 @@ void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k)
                 if (!(dens > MVT_R(0.0))) {
                     continue;
                 }
-                mvt_real gain = MVT_LOG(rp * dens / (lambda + ws->frag_dens[d])) - miss;
+                mvt_real gain = MVT_LOG(rp * dens / lambda) - miss;
                 if (!(gain > MVT_R(0.0))) {
                     continue;
                 }

@@ -14,8 +14,12 @@
  * fewer views place keeps its head within MVT_BODY_HEIGHT_BAND spreads of it (a truncation): one
  * view's update slides the head along the ray, and the height with it.
  * Existence (the integrated PDA's recursion with this camera's detection probability p):
- *   head detected with density N (its own, or    odds *= 1 - p + p N / lambda
- *   displaced: mvt_body_head_density)
+ *   head detected with density N (its own, or    odds *= 1 - p + p N / (lambda + phi), phi the
+ *   displaced: mvt_body_head_density)            density of other bodies' fragments at the blob
+ *                                                (mvt_body_fragment_density): a blob that may be a
+ *                                                piece of someone else says less of this person
+ *   head missed, its top in the mask in its own  odds unchanged; the top updates the state
+ *   column (mvt_body_explain.c)
  *   head missed, a fragment of the body in view  odds unchanged (the body is there; its head's
  *                                                blob is not, for reasons the model does not hold),
  *                                                and the head's column stays between its sides
@@ -249,7 +253,10 @@ void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_rea
         mvt_pkf_innov_t in;
         mvt_err_t err = mvt_pkf_innovation_from(&self->pred[t], &self->meas[k][d], NULL, &in);
         if (err == MVT_OK) {
-            tr->exist_lo += MVT_LOG(MVT_R(1.0) - p + p * mvt_body_head_density(self, &in) / (lambda + ws->frag_dens[d]));
+            const mvt_real uv[2] = {view->det[d].u, view->det[d].v};
+            const mvt_real other = ws->frag_dens[d] - mvt_body_fragment_density(self, k, t, uv);
+            const mvt_real alt = lambda + (other > MVT_R(0.0) ? other : MVT_R(0.0)); /* clutter or another's piece */
+            tr->exist_lo += MVT_LOG(MVT_R(1.0) - p + p * mvt_body_head_density(self, &in) / alt);
             if (!(in.d2 <= self->cfg.gate_chi2)) {
                 self->counters.gated_out++; /* displaced: evidence of the person, not of where */
                 continue;
