@@ -36,7 +36,7 @@ int mvt_body_silhouette(const mvt_tracker_t *self, const mvt_camera_t *cam, cons
     }
     box[0] = box[2] = head[0];
     box[1] = box[3] = head[1];
-    for (int i = 0; i < 6; i++) {
+    for (int i = 1; i < 6; i++) { /* i = 0, the head's centre, is `head` */
         const mvt_real s = (i % 3 == 0) ? MVT_R(0.0) : (i % 3 == 1 ? MVT_R(1.0) : MVT_R(-1.0));
         const mvt_real p[3] = {x[0] + s * side[0], x[1] + s * side[1], i < 3 ? x[2] : MVT_R(0.0)};
         mvt_real uv[2];
@@ -51,15 +51,24 @@ int mvt_body_silhouette(const mvt_tracker_t *self, const mvt_camera_t *cam, cons
     return 1;
 }
 
-int mvt_body_axis(const mvt_tracker_t *self, const mvt_camera_t *cam, const mvt_real x[3], mvt_real axis[5])
+int mvt_body_axis(const mvt_tracker_t *self, const mvt_camera_t *cam, const mvt_real x[3], mvt_real axis[MVT_BODY_AXIS_N])
+{
+    mvt_real head[2];
+    return mvt_cam_project(cam, x, head, NULL) == MVT_OK && mvt_body_axis_at(self, cam, x, head, axis);
+}
+
+int mvt_body_axis_at(const mvt_tracker_t *self, const mvt_camera_t *cam, const mvt_real x[3], const mvt_real head[2],
+                     mvt_real axis[MVT_BODY_AXIS_N])
 {
     const mvt_real foot[3] = {x[0], x[1], MVT_R(0.0)};
     const mvt_real mid[3] = {x[0], x[1], MVT_R(0.5) * x[2]};
     mvt_real fuv[2];
     const mvt_real depth = mvt_cam_depth(cam, mid);
-    if (mvt_cam_project(cam, x, axis, NULL) != MVT_OK || !(depth > MVT_R(0.0))) {
+    if (!(depth > MVT_R(0.0))) {
         return 0;
     }
+    axis[0] = head[0];
+    axis[1] = head[1];
     if (mvt_cam_project(cam, foot, fuv, NULL) != MVT_OK) {
         fuv[0] = axis[0]; /* a camera looking down steeply past the feet: the head alone */
         fuv[1] = axis[1];
@@ -67,6 +76,8 @@ int mvt_body_axis(const mvt_tracker_t *self, const mvt_camera_t *cam, const mvt_
     axis[2] = fuv[0];
     axis[3] = fuv[1];
     axis[4] = cam->fx * self->cfg.body_halfwidth_m / depth;
+    const mvt_real foot_depth = mvt_cam_depth(cam, foot);
+    axis[5] = foot_depth > MVT_R(0.0) ? cam->fx * MVT_BODY_SHADOW_M / foot_depth : MVT_R(0.0);
     return 1;
 }
 
@@ -86,10 +97,17 @@ static mvt_real cross2(const mvt_real o[2], const mvt_real a[2], const mvt_real 
     return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
 }
 
-int mvt_body_touch(const mvt_real a[5], const mvt_real b[5])
+int mvt_body_touch(const mvt_real a[MVT_BODY_AXIS_N], const mvt_real b[MVT_BODY_AXIS_N])
 {
     const mvt_real w = a[4] + b[4]; /* the mean width: half of each full width */
     const mvt_real *a0 = a, *a1 = a + 2, *b0 = b, *b1 = b + 2;
+    /* boxes of the axes, apart by more than the width: no contact (most pairs) */
+    if ((a0[0] < a1[0] ? a0[0] : a1[0]) - w > (b0[0] > b1[0] ? b0[0] : b1[0]) ||
+        (b0[0] < b1[0] ? b0[0] : b1[0]) - w > (a0[0] > a1[0] ? a0[0] : a1[0]) ||
+        (a0[1] < a1[1] ? a0[1] : a1[1]) - w > (b0[1] > b1[1] ? b0[1] : b1[1]) ||
+        (b0[1] < b1[1] ? b0[1] : b1[1]) - w > (a0[1] > a1[1] ? a0[1] : a1[1])) {
+        return 0;
+    }
     /* crossing axes */
     const mvt_real d1 = cross2(a0, a1, b0), d2 = cross2(a0, a1, b1), d3 = cross2(b0, b1, a0), d4 = cross2(b0, b1, a1);
     if (((d1 > MVT_R(0.0) && d2 < MVT_R(0.0)) || (d1 < MVT_R(0.0) && d2 > MVT_R(0.0))) &&
@@ -106,7 +124,7 @@ int mvt_body_touch(const mvt_real a[5], const mvt_real b[5])
     return m < w * w;
 }
 
-int mvt_body_on_body_below_head(const mvt_real axis[5], const mvt_real uv[2])
+int mvt_body_on_body_below_head(const mvt_real axis[MVT_BODY_AXIS_N], const mvt_real uv[2])
 {
     /* along the axis from the head toward the feet (which lie above the head in the picture of a
      * camera that looks down on the body's far side), past the head's share, up to the feet */
@@ -121,34 +139,28 @@ int mvt_body_on_body_below_head(const mvt_real axis[5], const mvt_real uv[2])
            point_seg_d2(uv, axis, axis + 2) <= axis[4] * axis[4];
 }
 
-int mvt_body_fragment_of(const mvt_camera_t *cam, const mvt_real axis[5], const mvt_real x[3], const mvt_real uv[2])
+int mvt_body_fragment_of(const mvt_real axis[MVT_BODY_AXIS_N], const mvt_real uv[2])
 {
-    if (mvt_body_on_body_below_head(axis, uv)) {
+    /* the floor by the feet */
+    const mvt_real fu = uv[0] - axis[2], fv = uv[1] - axis[3];
+    if (fu * fu + fv * fv <= axis[5] * axis[5]) {
         return 1;
     }
-    /* the floor near the feet: the top's ray meets the floor within MVT_BODY_SHADOW_M of them */
-    mvt_real o[3], dir[3];
-    if (mvt_cam_ray(cam, uv, o, dir) != MVT_OK || !(dir[2] < MVT_R(-1e-3)) || !(o[2] > MVT_R(0.0))) {
+    /* the body: within its half width of the axis' box first (most blobs are far from most bodies) */
+    const mvt_real w = axis[4];
+    const mvt_real u0 = axis[0] < axis[2] ? axis[0] : axis[2], u1 = axis[0] < axis[2] ? axis[2] : axis[0];
+    const mvt_real v0 = axis[1] < axis[3] ? axis[1] : axis[3], v1 = axis[1] < axis[3] ? axis[3] : axis[1];
+    if (uv[0] < u0 - w || uv[0] > u1 + w || uv[1] < v0 - w || uv[1] > v1 + w) {
         return 0;
     }
-    const mvt_real tf = -o[2] / dir[2];
-    const mvt_real dx = o[0] + tf * dir[0] - x[0], dy = o[1] + tf * dir[1] - x[1];
-    return dx * dx + dy * dy <= MVT_BODY_SHADOW_M * MVT_BODY_SHADOW_M;
+    return mvt_body_on_body_below_head(axis, uv);
 }
 
-mvt_real mvt_body_silhouette_area(const mvt_tracker_t *self, const mvt_camera_t *cam, const mvt_real axis[5],
-                                   const mvt_real x[3])
+mvt_real mvt_body_silhouette_area(const mvt_real axis[MVT_BODY_AXIS_N])
 {
-    const mvt_real w = axis[4];
+    const mvt_real w = axis[4], r = axis[5];
     const mvt_real len = MVT_SQRT((axis[2] - axis[0]) * (axis[2] - axis[0]) + (axis[3] - axis[1]) * (axis[3] - axis[1]));
-    mvt_real area = MVT_R(2.0) * w * len + MVT_R(3.14159265) * w * w;
-    const mvt_real feet[3] = {x[0], x[1], MVT_R(0.0)};
-    const mvt_real depth = mvt_cam_depth(cam, feet);
-    if (depth > MVT_R(0.0)) {
-        const mvt_real r = cam->fx * MVT_BODY_SHADOW_M / depth;
-        area += MVT_R(3.14159265) * r * r;
-    }
-    (void)self;
+    const mvt_real area = MVT_R(2.0) * w * len + MVT_R(3.14159265) * (w * w + r * r);
     return area > MVT_R(1.0) ? area : MVT_R(1.0);
 }
 
@@ -157,13 +169,13 @@ mvt_real mvt_body_fragment_density(const mvt_tracker_t *self, int k, int t, cons
     const mvt_track_t *tr = &self->tracks[t];
     const mvt_real *axis = self->body.axis[k][t];
     if (tr->id == 0 || tr->dormant || !(tr->exist_lo > MVT_R(0.0)) || !(axis[4] > MVT_R(0.0)) ||
-        !mvt_body_fragment_of(&self->cams[k], axis, tr->s.x, uv)) {
+        !mvt_body_fragment_of(axis, uv)) {
         return MVT_R(0.0);
     }
-    return mvt_body_prob(tr->exist_lo) * self->frag_n[k] / mvt_body_silhouette_area(self, &self->cams[k], axis, tr->s.x);
+    return mvt_body_prob(tr->exist_lo) * self->frag_n[k] / mvt_body_silhouette_area(axis);
 }
 
-int mvt_body_on_silhouette(const mvt_real axis[5], const mvt_real uv[2], mvt_real slack_px)
+int mvt_body_on_silhouette(const mvt_real axis[MVT_BODY_AXIS_N], const mvt_real uv[2], mvt_real slack_px)
 {
     const mvt_real w = axis[4] + slack_px;
     return point_seg_d2(uv, axis, axis + 2) <= w * w;

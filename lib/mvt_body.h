@@ -84,6 +84,9 @@
 #define MVT_BODY_FRAGMENTS_PRIOR MVT_R(0.3)
 #define MVT_BODY_FRAGMENTS_MIN MVT_R(0.01)
 
+/* The entries of a silhouette's axis (mvt_body_axis). */
+#define MVT_BODY_AXIS_N 6
+
 /* Probability p in (0, 1) as log odds, and back. */
 mvt_real mvt_body_logit(mvt_real p);
 mvt_real mvt_body_prob(mvt_real lo);
@@ -95,27 +98,30 @@ int mvt_body_silhouette(const mvt_tracker_t *self, const mvt_camera_t *cam, cons
                         mvt_real head[2]);
 
 /* The silhouette as the body's axis in the picture, thickened: axis = head u v, the floor point
- * under it u v, half the body's width at mid height (px), all raw pixels. 0 when the head is not in
+ * under it u v, half the body's width at mid height (px), and MVT_BODY_SHADOW_M at the feet's depth
+ * (px; 0 when the feet are not in front of the camera), all raw pixels. 0 when the head is not in
  * front of the camera. O(1). */
-int mvt_body_axis(const mvt_tracker_t *self, const mvt_camera_t *cam, const mvt_real x[3], mvt_real axis[5]);
+int mvt_body_axis(const mvt_tracker_t *self, const mvt_camera_t *cam, const mvt_real x[3], mvt_real axis[MVT_BODY_AXIS_N]);
+/* The same, the head's projection `head` given. */
+int mvt_body_axis_at(const mvt_tracker_t *self, const mvt_camera_t *cam, const mvt_real x[3], const mvt_real head[2],
+                     mvt_real axis[MVT_BODY_AXIS_N]);
 
 /* Two silhouettes touch in the picture (one blob): their axes come closer than their mean width. */
-int mvt_body_touch(const mvt_real a[5], const mvt_real b[5]);
+int mvt_body_touch(const mvt_real a[MVT_BODY_AXIS_N], const mvt_real b[MVT_BODY_AXIS_N]);
 
 /* Image point uv lies on the silhouette (within its half width of the axis) and at least
  * MVT_BODY_FRAGMENT_BELOW of the axis' length below the head: a fragment's top. */
-int mvt_body_on_body_below_head(const mvt_real axis[5], const mvt_real uv[2]);
+int mvt_body_on_body_below_head(const mvt_real axis[MVT_BODY_AXIS_N], const mvt_real uv[2]);
 
-/* Image point uv, a blob's top, is a fragment of the body with head x and silhouette axis (both
- * in camera cam): on the body below the head (mvt_body_on_body_below_head), or on the floor within
- * MVT_BODY_SHADOW_M of the feet (the body's shadow or reflection, which background subtraction
- * keeps as foreground and which, seen from above, may be the top of the body's blob). */
-int mvt_body_fragment_of(const mvt_camera_t *cam, const mvt_real axis[5], const mvt_real x[3], const mvt_real uv[2]);
+/* Image point uv, a blob's top, is a fragment of the body with silhouette axis: on the body below
+ * the head (mvt_body_on_body_below_head), or on the floor by the feet, within MVT_BODY_SHADOW_M at
+ * their depth of their image (the body's shadow or reflection, which background subtraction keeps
+ * as foreground and which, seen from above, may be the top of the body's blob). O(1). */
+int mvt_body_fragment_of(const mvt_real axis[MVT_BODY_AXIS_N], const mvt_real uv[2]);
 
-/* The area (px^2) over which the fragments of the body with head x and silhouette axis lie in
- * camera cam: the thickened axis and the floor within MVT_BODY_SHADOW_M of the feet. */
-mvt_real mvt_body_silhouette_area(const mvt_tracker_t *self, const mvt_camera_t *cam, const mvt_real axis[5],
-                                   const mvt_real x[3]);
+/* The area (px^2) over which the fragments of the body with silhouette axis lie: the thickened
+ * axis and the floor by the feet (mvt_body_fragment_of). O(1). */
+mvt_real mvt_body_silhouette_area(const mvt_real axis[MVT_BODY_AXIS_N]);
 
 /* The density (1/px^2) of camera k's fragments of track t's body (likely present) at image point
  * uv: its fragments per frame (the camera's learnt rate) over its silhouette's area, times its
@@ -123,7 +129,7 @@ mvt_real mvt_body_silhouette_area(const mvt_tracker_t *self, const mvt_camera_t 
 mvt_real mvt_body_fragment_density(const mvt_tracker_t *self, int k, int t, const mvt_real uv[2]);
 
 /* Image point uv lies on the silhouette: within its half width and slack_px of the axis. */
-int mvt_body_on_silhouette(const mvt_real axis[5], const mvt_real uv[2], mvt_real slack_px);
+int mvt_body_on_silhouette(const mvt_real axis[MVT_BODY_AXIS_N], const mvt_real uv[2], mvt_real slack_px);
 
 /* The head x lies within exit_margin_m of the volume's side walls: where people leave. */
 int mvt_body_near_side_wall(const mvt_tracker_config_t *c, const mvt_real x[3]);
@@ -154,7 +160,7 @@ mvt_err_t mvt_body_feet_innovation(const mvt_tracker_t *self, const mvt_cv_state
  * every body more likely present than not whose silhouette touches this one and whose head is
  * higher in the picture makes the blob's top its own (a nearer body hides the head, or the two
  * merge into one blob), and lowers the chance to MVT_BODY_P_SHOWN_HIDDEN by its existence. O(T). */
-mvt_real mvt_body_shown(const mvt_tracker_t *self, int k, const mvt_real axis[5], int self_t);
+mvt_real mvt_body_shown(const mvt_tracker_t *self, int k, const mvt_real axis[MVT_BODY_AXIS_N], int self_t);
 
 /* The density (1/px^2) of a head's detection at innovation in, as the motion model weighs it
  * (mvt_imm.h): the person's, N(y; 0, S), with probability 1 - p_outlier, and displaced anywhere

@@ -88,7 +88,7 @@ static mvt_real detect_prob(const mvt_tracker_t *self, const mvt_frame_t *frame,
                             const mvt_real uv[2])
 {
     const mvt_camera_t *cam = &self->cams[j];
-    mvt_real axis[5];
+    mvt_real axis[MVT_BODY_AXIS_N];
     if (!mvt_body_in_picture(cam, uv) || !mvt_body_axis(self, cam, x, axis)) {
         return MVT_R(0.0);
     }
@@ -207,9 +207,8 @@ static int admissible(const mvt_tracker_t *self, const mvt_frame_t *frame, const
     const mvt_detection_t *det = &frame->views[k].det[cand->det[k]];
     const mvt_real uv[2] = {det->u, det->v};
     for (int i = 0; i < n_born; i++) {
-        mvt_real axis[5];
-        if (mvt_body_axis(self, &self->cams[k], self->tracks[born[i]].s.x, axis) &&
-            mvt_body_fragment_of(&self->cams[k], axis, self->tracks[born[i]].s.x, uv)) {
+        mvt_real axis[MVT_BODY_AXIS_N];
+        if (mvt_body_axis(self, &self->cams[k], self->tracks[born[i]].s.x, axis) && mvt_body_fragment_of(axis, uv)) {
             return 0;
         }
     }

@@ -179,7 +179,7 @@ void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k)
         int best = -1;
         for (int i = 0; i < nr; i++) {
             const int t = rows[i];
-            if (mvt_body_fragment_of(&self->cams[k], ws->axis[k][t], self->tracks[t].s.x, uv) &&
+            if (mvt_body_fragment_of(ws->axis[k][t], uv) &&
                 (best < 0 || self->tracks[t].exist_lo > self->tracks[best].exist_lo)) {
                 best = t;
             }

@@ -18,7 +18,7 @@
 
 #include <stddef.h>
 
-mvt_real mvt_body_shown(const mvt_tracker_t *self, int k, const mvt_real axis[5], int self_t)
+mvt_real mvt_body_shown(const mvt_tracker_t *self, int k, const mvt_real axis[MVT_BODY_AXIS_N], int self_t)
 {
     mvt_real shown = MVT_R(1.0);
     for (int j = 0; j < MVT_MAX_TARGETS; j++) {
@@ -73,7 +73,7 @@ void mvt_body_visibility(mvt_tracker_t *self, const mvt_view_t *view, int k)
             self->counters.behind_camera++;
             continue;
         }
-        if (!mvt_body_silhouette(self, cam, tr->s.x, sil, ws->head[t]) || !mvt_body_axis(self, cam, tr->s.x, axis)) {
+        if (!mvt_body_silhouette(self, cam, tr->s.x, sil, ws->head[t]) || !mvt_body_axis_at(self, cam, tr->s.x, ws->head[t], axis)) {
             sil[0] = MVT_R(1.0);
             sil[2] = MVT_R(0.0);
             axis[4] = MVT_R(-1.0);

@@ -383,9 +383,10 @@ typedef struct mvt_body_ws {
     mvt_real sil[MVT_MAX_CAMERAS][MVT_MAX_TARGETS][4]; /* each track's predicted silhouette box in
                                                           each camera (u0 v0 u1 v1, raw px); u1 < u0:
                                                           not in that picture */
-    mvt_real axis[MVT_MAX_CAMERAS][MVT_MAX_TARGETS][5]; /* ... and its axis: head u v, the point
-                                                           under it on the floor u v, and half the
-                                                           body's width at mid height, raw px */
+    mvt_real axis[MVT_MAX_CAMERAS][MVT_MAX_TARGETS][6]; /* ... and its axis: head u v, the point
+                                                           under it on the floor u v, half the
+                                                           body's width at mid height and the
+                                                           shadow's reach at the feet, raw px */
     mvt_real head[MVT_MAX_TARGETS][2];  /* this camera: predicted head, raw px */
     mvt_real pd[MVT_MAX_TARGETS];       /* this camera: probability that the head is reported */
     int16_t assign[MVT_MAX_TARGETS];    /* this camera: the detection that is the track's head, -1 */
