@@ -28,8 +28,6 @@
 #include "mvt_body.h"
 
 #include <math.h>
-#include <stdio.h>
-#include <stdlib.h>
 #include <string.h>
 
 static mvt_real dot3(const mvt_real a[3], const mvt_real b[3])
@@ -243,7 +241,6 @@ static int heir_of(const mvt_tracker_t *self, const mvt_body_cand_t *cand)
         }
         mvt_real det;
         const mvt_real d2 = mvt_trk_mahalanobis3(tr->s.x, P, cand->x, cand->P, &det);
-        if (getenv("DBGID") && tr->id == atoi(getenv("DBGID"))) fprintf(stderr, "HEIR t%lld id %d x %.2f %.2f %.2f cand %.2f %.2f %.2f d2 %.2f P %.3f %.3f lo %.2f since %.2f dorm %d\n", (long long)self->last_utime_us, tr->id, (double)tr->s.x[0], (double)tr->s.x[1], (double)tr->s.x[2], (double)cand->x[0], (double)cand->x[1], (double)cand->x[2], (double)d2, (double)P[0], (double)P[4], (double)tr->exist_lo, (double)mvt_us_to_s(self->last_utime_us - tr->last_update_us), tr->dormant);
         if (!(d2 >= MVT_R(0.0)) || !(d2 < MVT_TRK_GATE3) || !(det > MVT_R(0.0))) {
             continue;
         }
