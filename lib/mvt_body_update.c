@@ -190,6 +190,15 @@ static mvt_real extent_llr(const mvt_tracker_t *self, const mvt_view_t *view, in
     return llr;
 }
 
+/* Camera k updated track t's head; it placed it unless the motion model judged the head displaced. */
+static void mark_placed(mvt_track_t *tr, int k)
+{
+    tr->cameras_used |= 1u << k;
+    if (tr->view[k].p < MVT_R(0.5)) {
+        tr->cameras_placed |= 1u << k;
+    }
+}
+
 /* Learns camera k's detection probability from this frame: each track likely present whose head
  * the model expects to be shown (no body over it) is a trial, its head's blob a hit. */
 static void learn_detection(mvt_tracker_t *self, int k, mvt_real dt)
@@ -232,10 +241,7 @@ void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_rea
                 self->counters.numeric_faults++;
                 continue;
             }
-            tr->cameras_used |= 1u << k;
-            if (tr->view[k].p < MVT_R(0.5)) {
-                tr->cameras_placed |= 1u << k;
-            }
+            mark_placed(tr, k);
             self->counters.mask_top_updates++;
             continue;
         }
@@ -267,10 +273,7 @@ void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_rea
             self->counters.numeric_faults++;
             continue;
         }
-        tr->cameras_used |= 1u << k;
-        if (tr->view[k].p < MVT_R(0.5)) {
-            tr->cameras_placed |= 1u << k;
-        }
+        mark_placed(tr, k);
         self->counters.updates++;
         const mvt_detection_t *det = &view->det[d];
         if (self->chroma_ok[k][d] && mvt_trk_box_ok(det->box) && alone_in_blob(self, k, t, det->box)) {
