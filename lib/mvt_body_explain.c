@@ -10,12 +10,19 @@
  * clutter lies anywhere in the picture with density lambda (mvt_body_clutter_density). Giving blob
  * d to track t rather than leaving t missed and d clutter gains ln(r p N / lambda) - ln(1 - r p);
  * the assignment maximises the sum of the gains.
- * Fragments: a blob left over whose top lies inside a tracked silhouette, below its head, is part
- * of that body (a torso under a hole, legs, a head split from its shoulders): it is nobody's head
- * and no new person. Among several such bodies the likeliest present takes it.
+ * Fragments: each blob's top has a density of the bodies' fragments (mvt_body_fragment_density:
+ * the camera's learnt fragments per body over the silhouette and the floor by the feet). A blob
+ * left over whose top lies on a tracked silhouette past its head, or by its feet, is part of that
+ * body (a torso under a hole, legs, a head split from its shoulders, a shadow) when that density
+ * beats clutter's: it is nobody's head and no new person. Among several such bodies the likeliest
+ * present takes it.
  * Merged blobs: a track left with neither whose predicted head lies in the box of a blob another
- * head tops, under that top, may be inside that blob: the blob is its host.
- * Cost O(T D) gating + O(T^2 (T + D)) assignment; memory: the tracker's workspaces.
+ * body explains (its head or its fragment tops it), under that top, and on the blob's foreground
+ * where the camera sent its mask, may be inside that blob: the blob is its host.
+ * Mask tops: a shown track with no blob for its head takes the mask's top in its own column as
+ * its head where there is one (mask_head).
+ * Cost O(T D) gating + O(T^2 (T + D)) assignment + the mask tops' bands; memory: the tracker's
+ * workspaces.
  */
 #include "mvt_body.h"
 
