@@ -20,13 +20,18 @@
  *     predict     each track's estimate to the camera's capture time (mvt_trk_motion.c)
  *     visibility  mvt_body_vis.c: each track's predicted head and silhouette; the probability that
  *                 the camera reports the head: p_detect inside the picture, less where the silhouette
- *                 of a body likely present covers it (hidden, or merged under that body's top)
+ *                 of a body likely present covers it (hidden, or merged under that body's top),
+ *                 unless the camera's mask shows background there
  *     explain     mvt_body_explain.c: per camera, a global assignment of blobs to heads on the
- *                 likelihood ratio of head against clutter; a blob left over whose top lies inside
- *                 a tracked silhouette below its head is that body's fragment; the rest unexplained
- *     update      mvt_body_update.c: a head updates its track (PKF); the
- *                 existence takes the camera's evidence: detected, missed with a fragment of the
- *                 body in view (no evidence), or missed; the camera's clutter rate is learnt
+ *                 likelihood ratio of head against clutter; a blob left over whose top lies on a
+ *                 tracked silhouette past its head, or by its feet, is that body's fragment when
+ *                 its fragment density beats clutter; a head in another body's blob is hosted;
+ *                 a shown head no blob reports is the mask's top in its column; the rest unexplained
+ *     update      mvt_body_update.c: a head (a blob's, or the mask's top) updates its track (PKF);
+ *                 the existence takes the camera's evidence: detected (against clutter and other
+ *                 bodies' fragments), hosted (with the merged box's edges), missed with a fragment
+ *                 of the body in view (no evidence), or missed; the camera's clutter rate,
+ *                 detection probability and fragment rate are learnt
  *   one view     mvt_body_update.c: a track one camera alone placed takes its blob's visible feet;
  *                a track fewer than two placed keeps the person's height (the last two views gave)
  *   birth        mvt_body_birth.c: each unexplained blob is the seed of a candidate: its head ray
