@@ -34,18 +34,6 @@
 /* Gains are offset by this constant to make the solver's costs non-negative (it forbids < 0). */
 #define GAIN_OFFSET MVT_R(1000.0)
 
-/* Half a head's width (m): the band of image columns searched for a head's top. */
-#define TOP_HEAD_HALFWIDTH_M MVT_R(0.11)
-/* A head's top is narrower than this (m) in its first mask rows; a wider top is a shoulder line or
- * two heads side by side, and says nothing of one head's column. */
-#define TOP_MAX_WIDTH_M MVT_R(0.3)
-/* Above a head's top the picture is background for this far (m) at its depth: a torso fragment
- * under a hole in the mask, or a bump of a shoulder, has the head above it. */
-#define TOP_CLEAR_M MVT_R(0.3)
-/* An outline has bumps a head's width apart (shoulders, arms, a neighbour's head), so a top is
- * taken for the head only nearer its prediction than a blob is: chi-square 2 dof, 99 %. */
-#define TOP_GATE_CHI2 MVT_R(9.21)
-
 /* Track t, likely present, with no blob of camera k for its head: where the camera sent its
  * foreground mask, the head is the mask's top in its own column when there is one (a blob reports
  * one top, the top-most of the region, so the head of a person merged with another, or cut from
@@ -57,9 +45,9 @@ static int mask_head(mvt_tracker_t *self, const mvt_view_t *view, int k, int t)
     const mvt_camera_t *cam = &self->cams[k];
     const mvt_track_t *tr = &self->tracks[t];
     mvt_body_ws_t *ws = &self->body;
-    mvt_pkf_pred_t p;
+    mvt_pkf_pred_t p = self->pred[t]; /* the mask is in raw pixels: the Jacobian form's prediction */
     if (view->mask == NULL || view->mask->width < 1 || tr->s.x[2] < MVT_TRK_MIN_HEAD_M ||
-        mvt_pkf_predict_obs(&tr->s, cam, MVT_PKF_JACOBIAN, &p) != MVT_OK) {
+        (p.lin != MVT_PKF_JACOBIAN && mvt_pkf_predict_obs(&tr->s, cam, MVT_PKF_JACOBIAN, &p) != MVT_OK)) {
         return 0;
     }
     const mvt_real s = (mvt_real)view->mask->scale;
@@ -69,9 +57,9 @@ static int mask_head(mvt_tracker_t *self, const mvt_view_t *view, int k, int t)
     const mvt_real px_per_m = cam->fx / p.depth_m;
     mvt_real uv[2];
     if (!mvt_mask_fg_near(view->mask, p.h, MVT_R(3.0) * su) ||
-        !mvt_mask_top_in_band(view->mask, p.h[0], px_per_m * TOP_HEAD_HALFWIDTH_M + su, p.h[1] - MVT_R(3.0) * sv,
-                              p.h[1] + MVT_R(3.0) * sv, px_per_m * TOP_MAX_WIDTH_M + MVT_R(2.0) * s,
-                              px_per_m * TOP_CLEAR_M, uv)) {
+        !mvt_mask_top_in_band(view->mask, p.h[0], px_per_m * MVT_TRK_HEAD_HALFWIDTH_M + su, p.h[1] - MVT_R(3.0) * sv,
+                              p.h[1] + MVT_R(3.0) * sv, px_per_m * MVT_TRK_TOP_MAX_WIDTH_M + MVT_R(2.0) * s,
+                              px_per_m * MVT_TRK_TOP_CLEAR_M, uv)) {
         return 0;
     }
     for (int d = 0; d < self->num_meas[k]; d++) {
@@ -89,7 +77,7 @@ static int mask_head(mvt_tracker_t *self, const mvt_view_t *view, int k, int t)
     }
     mvt_pkf_innov_t in;
     if (mvt_pkf_meas_make(cam, uv, sig, &ws->top[t]) != MVT_OK ||
-        mvt_pkf_innovation_from(&self->pred[t], &ws->top[t], NULL, &in) != MVT_OK || !(in.d2 <= TOP_GATE_CHI2)) {
+        mvt_pkf_innovation_from(&self->pred[t], &ws->top[t], NULL, &in) != MVT_OK || !(in.d2 <= MVT_TRK_TOP_GATE_CHI2)) {
         return 0;
     }
     return 1;

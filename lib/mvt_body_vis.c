@@ -15,7 +15,6 @@
 #include "mvt_mask.h"
 
 #include <math.h>
-
 #include <stddef.h>
 
 mvt_real mvt_body_shown(const mvt_tracker_t *self, int k, const mvt_real axis[MVT_BODY_AXIS_N], int self_t)
@@ -33,10 +32,8 @@ mvt_real mvt_body_shown(const mvt_tracker_t *self, int k, const mvt_real axis[MV
     return shown;
 }
 
-/* Half a head's width (m): a head hidden at the predicted place has foreground this near. */
-#define VIS_HEAD_HALFWIDTH_M MVT_R(0.11)
-
-/* Camera k's mask shows background all around track t's predicted head: nothing hides it. */
+/* Camera k's mask shows background all around track t's predicted head (within half a head's width
+ * and its spread): nothing hides it. */
 static int head_on_background(const mvt_tracker_t *self, const mvt_view_t *view, int k, int t)
 {
     if (view->mask == NULL || view->mask->width < 1) {
@@ -46,7 +43,7 @@ static int head_on_background(const mvt_tracker_t *self, const mvt_view_t *view,
     const mvt_pkf_pred_t *p = &self->pred[t];
     const mvt_real s2 = p->hph[0] > p->hph[2] ? p->hph[0] : p->hph[2];
     const mvt_real r = MVT_R(3.0) * cam->sigma_px + MVT_R(2.0) * MVT_SQRT(s2) +
-                       cam->fx * VIS_HEAD_HALFWIDTH_M / p->depth_m;
+                       cam->fx * MVT_TRK_HEAD_HALFWIDTH_M / p->depth_m;
     return !mvt_mask_fg_near(view->mask, self->body.head[t], r);
 }
 

@@ -37,6 +37,17 @@ static inline int mvt_trk_popcount(uint32_t x)
  * filter's births use the same height (mvt_pft_config_t.birth_min_height_m, 1 m). */
 #define MVT_TRK_MIN_HEAD_M MVT_R(1.0)
 
+/* A head's top in a foreground mask (mvt_trk_occl.c, mvt_body_explain.c): half a head's width (m),
+ * the band of image columns searched; a top narrower than MVT_TRK_TOP_MAX_WIDTH_M (m) in its first
+ * rows (a wider one is a shoulder line or two heads side by side and says nothing of one head's
+ * column); background for MVT_TRK_TOP_CLEAR_M (m) above it at its depth (a torso fragment under a
+ * hole, or a shoulder's bump, has the head above it); and, since an outline has bumps a head's
+ * width apart, nearer the prediction than a blob need be: chi-square 2 dof, 99 %. */
+#define MVT_TRK_HEAD_HALFWIDTH_M MVT_R(0.11)
+#define MVT_TRK_TOP_MAX_WIDTH_M MVT_R(0.3)
+#define MVT_TRK_TOP_CLEAR_M MVT_R(0.3)
+#define MVT_TRK_TOP_GATE_CHI2 MVT_R(9.21)
+
 /* How long the boxes' evidence for a hidden person is remembered (need_llr), s: a second of frames
  * outweighs one noisy box edge, and a person who left stops being needed within a few seconds. */
 #define MVT_TRK_NEED_MEMORY_S MVT_R(1.0)

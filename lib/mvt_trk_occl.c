@@ -344,19 +344,6 @@ static mvt_real extent_llr(const mvt_tracker_t *self, const mvt_view_t *view, in
     return llr;
 }
 
-/* Half a head's width (m): the band searched for a head's top in its own column. */
-#define TOP_HEAD_HALFWIDTH_M MVT_R(0.11)
-/* A head's top is narrower than this (m) in its first two mask rows; a wider top is a shoulder
- * line or two heads side by side, and says nothing of one head's column. */
-#define TOP_MAX_WIDTH_M MVT_R(0.3)
-/* Above a head's top the picture is background for this far (m) at its depth: a torso fragment
- * under a hole in the mask, or a bump of a shoulder, has the head above it. */
-#define TOP_CLEAR_M MVT_R(0.3)
-/* A silhouette's outline has bumps a head's width apart (shoulders, arms, a neighbour's head), so
- * a top is taken for the track's head only nearer its prediction than a detection is: chi-square
- * 2 dof, 99 % (the detections' gate, gate_chi2, is 99.9 %). */
-#define TOP_GATE_CHI2 MVT_R(9.21)
-
 /* A confirmed track that camera k did not update, with a foreground mask from that camera: is its
  * head a top of the silhouette in its own column? A blob's reported point is the top of the whole
  * region, so where two people's silhouettes merged the lower head is in no detection although
@@ -365,7 +352,7 @@ static mvt_real extent_llr(const mvt_tracker_t *self, const mvt_view_t *view, in
  * and nobody else's: not within 3 sigma of any blob's reported top (association has decided that
  * detection: given to a track, withheld as a merged pair's, or outside every gate), not inside
  * or on top of another confirmed track's predicted silhouette (where the outline may be their
- * head or body), and inside the track's chi-square gate (TOP_GATE_CHI2). Returns 1 when found. */
+ * head or body), and inside the track's chi-square gate (MVT_TRK_TOP_GATE_CHI2). Returns 1 when found. */
 static int mask_top(mvt_tracker_t *self, const mvt_view_t *view, int k, int t, const mvt_pkf_pred_t *p,
                     occl_others_t *o)
 {
@@ -374,11 +361,11 @@ static int mask_top(mvt_tracker_t *self, const mvt_view_t *view, int k, int t, c
     const mvt_real sig2 = cam->sigma_px * cam->sigma_px + s * s; /* the detector's noise and a mask pixel */
     const mvt_real sig = MVT_SQRT(sig2);
     const mvt_real su = MVT_SQRT(p->hph[0] + sig2), sv = MVT_SQRT(p->hph[2] + sig2);
-    const mvt_real head_px = cam->fx * TOP_HEAD_HALFWIDTH_M / p->depth_m;
+    const mvt_real head_px = cam->fx * MVT_TRK_HEAD_HALFWIDTH_M / p->depth_m;
     mvt_real uv[2];
     if (!mvt_mask_top_in_band(view->mask, p->h[0], head_px + su, p->h[1] - MVT_R(3.0) * sv, p->h[1] + MVT_R(3.0) * sv,
-                              cam->fx * TOP_MAX_WIDTH_M / p->depth_m + MVT_R(2.0) * s,
-                              cam->fx * TOP_CLEAR_M / p->depth_m, uv)) {
+                              cam->fx * MVT_TRK_TOP_MAX_WIDTH_M / p->depth_m + MVT_R(2.0) * s,
+                              cam->fx * MVT_TRK_TOP_CLEAR_M / p->depth_m, uv)) {
         return 0;
     }
     for (int d = 0; d < self->num_meas[k]; d++) {
@@ -404,7 +391,7 @@ static int mask_top(mvt_tracker_t *self, const mvt_view_t *view, int k, int t, c
     mvt_pkf_meas_t *m = &self->top_meas[t];
     mvt_pkf_innov_t in;
     if (mvt_pkf_meas_make(cam, uv, sig, m) != MVT_OK ||
-        mvt_pkf_innovation_from(&self->pred[t], m, NULL, &in) != MVT_OK || !(in.d2 <= TOP_GATE_CHI2)) {
+        mvt_pkf_innovation_from(&self->pred[t], m, NULL, &in) != MVT_OK || !(in.d2 <= MVT_TRK_TOP_GATE_CHI2)) {
         return 0;
     }
     self->top_ok[t] = 1;
