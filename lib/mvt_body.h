@@ -65,9 +65,13 @@
 #define MVT_BODY_PD_S MVT_R(30.0)
 #define MVT_BODY_PD_MIN MVT_R(0.3)
 #define MVT_BODY_PD_MAX MVT_R(0.98)
-/* The probability that a head inside another body's silhouette still shows as a blob top of its
- * own (two tops of one blob the detector separates, a head above a shoulder line). */
+/* The probability that a head another body hides or merges with (mvt_body_shown) still shows as a
+ * blob top of its own: a segmentation that cuts bodies at the neck or between two people shows
+ * them, one that keeps each region whole does not. Learnt per camera like the detection
+ * probability (hidden heads likely present that took a blob, per p_detect), from this prior and
+ * floor up to MVT_BODY_P_SHOWN_HIDDEN_MAX. */
 #define MVT_BODY_P_SHOWN_HIDDEN MVT_R(0.02)
+#define MVT_BODY_P_SHOWN_HIDDEN_MAX MVT_R(0.9)
 /* The probability that a blob's bottom, where nothing cuts it, is the person's feet (not a shadow,
  * a blob merged with the floor's reflection, legs the colour of the floor). */
 #define MVT_BODY_P_FEET MVT_R(0.9)
@@ -164,7 +168,8 @@ mvt_err_t mvt_body_feet_innovation(const mvt_tracker_t *self, const mvt_cv_state
  * own, given the bodies tracked there (ws.axis of this camera; track self_t, or -1, excluded):
  * every body more likely present than not whose silhouette touches this one and whose head is
  * higher in the picture makes the blob's top its own (a nearer body hides the head, or the two
- * merge into one blob), and lowers the chance to MVT_BODY_P_SHOWN_HIDDEN by its existence. O(T). */
+ * merge into one blob), and lowers the chance to camera k's learnt rate of hidden heads shown (MVT_BODY_P_SHOWN_HIDDEN)
+ * by its existence. O(T). */
 mvt_real mvt_body_shown(const mvt_tracker_t *self, int k, const mvt_real axis[MVT_BODY_AXIS_N], int self_t);
 
 /* The density (1/px^2) of a head's detection at innovation in, as the motion model weighs it

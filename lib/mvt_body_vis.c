@@ -26,7 +26,7 @@ mvt_real mvt_body_shown(const mvt_tracker_t *self, int k, const mvt_real axis[MV
             continue;
         }
         if (aj[1] <= axis[1] && mvt_body_touch(aj, axis)) {
-            shown *= MVT_R(1.0) - mvt_body_prob(self->tracks[j].exist_lo) * (MVT_R(1.0) - MVT_BODY_P_SHOWN_HIDDEN);
+            shown *= MVT_R(1.0) - mvt_body_prob(self->tracks[j].exist_lo) * (MVT_R(1.0) - self->p_hidden_k[k]);
         }
     }
     return shown;
@@ -51,6 +51,9 @@ void mvt_body_visibility(mvt_tracker_t *self, const mvt_view_t *view, int k)
 {
     if (!(self->p_detect_k[k] > MVT_R(0.0))) {
         self->p_detect_k[k] = self->cfg.p_detect;
+    }
+    if (!(self->p_hidden_k[k] > MVT_R(0.0))) {
+        self->p_hidden_k[k] = MVT_BODY_P_SHOWN_HIDDEN; /* the prior */
     }
     const mvt_camera_t *cam = &self->cams[k];
     mvt_body_ws_t *ws = &self->body;

@@ -120,6 +120,7 @@ void mvt_tracker_save(const mvt_tracker_t *self, mvt_tracker_persist_t *out)
     out->birth_rate_us = self->birth_rate_us;
     memcpy(out->clutter_n, self->clutter_n, sizeof(out->clutter_n));
     memcpy(out->p_detect_k, self->p_detect_k, sizeof(out->p_detect_k));
+    memcpy(out->p_hidden_k, self->p_hidden_k, sizeof(out->p_hidden_k));
     memcpy(out->frag_n, self->frag_n, sizeof(out->frag_n));
 }
 
@@ -174,6 +175,7 @@ static int tracker_state_ok(const mvt_tracker_config_t *c, const mvt_tracker_per
     for (int k = 0; k < MVT_MAX_CAMERAS; k++) {
         if (!(p->clutter_n[k] >= MVT_R(0.0) && p->clutter_n[k] <= (mvt_real)MVT_MAX_DETECTIONS) ||
             !(p->p_detect_k[k] >= MVT_R(0.0) && p->p_detect_k[k] < MVT_R(1.0)) ||
+            !(p->p_hidden_k[k] >= MVT_R(0.0) && p->p_hidden_k[k] < MVT_R(1.0)) ||
             !(p->frag_n[k] >= MVT_R(0.0) && p->frag_n[k] <= (mvt_real)MVT_MAX_DETECTIONS)) {
             return 0;
         }
@@ -256,6 +258,7 @@ mvt_err_t mvt_tracker_resume(mvt_tracker_t *self, const mvt_tracker_persist_t *p
     self->birth_rate_us = p->birth_rate_us;
     memcpy(self->clutter_n, p->clutter_n, sizeof(self->clutter_n));
     memcpy(self->p_detect_k, p->p_detect_k, sizeof(self->p_detect_k));
+    memcpy(self->p_hidden_k, p->p_hidden_k, sizeof(self->p_hidden_k));
     memcpy(self->frag_n, p->frag_n, sizeof(self->frag_n));
     return MVT_OK;
 }

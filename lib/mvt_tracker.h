@@ -477,6 +477,9 @@ typedef struct mvt_tracker {
                                             frame, learnt (mvt_body.c) */
     mvt_real p_detect_k[MVT_MAX_CAMERAS]; /* ... and its detection probability of a visible head,
                                              learnt (mvt_body_update.c); 0: not yet */
+    mvt_real p_hidden_k[MVT_MAX_CAMERAS]; /* ... and the chance that a head another body hides or
+                                             merges shows as a blob top of its own, learnt
+                                             (mvt_body_update.c); 0: not yet */
     mvt_real frag_n[MVT_MAX_CAMERAS];     /* ... and the fragments it shows per body likely present
                                              per frame, learnt (mvt_body.c); 0: not yet */
     mvt_body_ws_t body;         /* MVT_LIFECYCLE_BODY's workspace */
@@ -520,6 +523,7 @@ typedef struct mvt_tracker_persist {
     int64_t birth_rate_us;
     mvt_real clutter_n[MVT_MAX_CAMERAS];
     mvt_real p_detect_k[MVT_MAX_CAMERAS];
+    mvt_real p_hidden_k[MVT_MAX_CAMERAS];
     mvt_real frag_n[MVT_MAX_CAMERAS];
 } mvt_tracker_persist_t;
 

@@ -243,6 +243,10 @@ void mvt_trk_predict(mvt_tracker_t *self, mvt_track_t *tr, int64_t utime_us);
 void mvt_trk_predict_pos(mvt_tracker_t *self, mvt_track_t *tr, int64_t utime_us);
 mvt_err_t mvt_trk_update_pkf(mvt_tracker_t *self, mvt_track_t *tr, int k, const mvt_pkf_innov_t *in,
                              const mvt_real *extra_px2);
+/* The same for a head that shows (is not hidden behind another body) with probability `shown`
+ * (0..1): the point is displaced (mvt_imm.h's impulsive noise) with prior 1 - shown (1 - p_outlier). */
+mvt_err_t mvt_trk_update_head(mvt_tracker_t *self, mvt_track_t *tr, int k, const mvt_pkf_innov_t *in,
+                              const mvt_real *extra_px2, mvt_real shown);
 void mvt_trk_settle(mvt_tracker_t *self, mvt_track_t *tr);
 mvt_err_t mvt_trk_update_point(mvt_tracker_t *self, mvt_track_t *tr, const mvt_real z[3], const mvt_real R[9]);
 /* A whole (not position-only) update with a pixel innovation of any H on the position, without a

@@ -63,6 +63,12 @@ void mvt_trk_predicted(const mvt_tracker_t *self, const mvt_track_t *tr, int64_t
 mvt_err_t mvt_trk_update_pkf(mvt_tracker_t *self, mvt_track_t *tr, int k, const mvt_pkf_innov_t *in,
                              const mvt_real *extra_px2)
 {
+    return mvt_trk_update_head(self, tr, k, in, extra_px2, MVT_R(1.0));
+}
+
+mvt_err_t mvt_trk_update_head(mvt_tracker_t *self, mvt_track_t *tr, int k, const mvt_pkf_innov_t *in,
+                              const mvt_real *extra_px2, mvt_real shown)
+{
     if (single(self)) {
         return mvt_pkf_update(&tr->s, in);
     }
@@ -76,6 +82,12 @@ mvt_err_t mvt_trk_update_pkf(mvt_tracker_t *self, mvt_track_t *tr, int k, const 
     const uint32_t others = (tr->cameras_placed | tr->cameras_placed_prev) & ~(1u << k);
     if (mvt_trk_popcount(others) < 2) {
         tr->view[k].p = MVT_R(0.0);
+    }
+    if (shown < MVT_R(1.0)) {
+        /* the head shows with probability `shown`; otherwise the point is another part of the body */
+        mvt_imm_config_t c = self->cfg.motion;
+        c.p_outlier = MVT_R(1.0) - (shown > MVT_R(0.0) ? shown : MVT_R(0.0)) * (MVT_R(1.0) - c.p_outlier);
+        return mvt_imm_update_view(&tr->imm, &c, in->H, in->y, noise, in->S, &tr->view[k], &tr->s);
     }
     return mvt_imm_update_view(&tr->imm, &self->cfg.motion, in->H, in->y, noise, in->S, &tr->view[k], &tr->s);
 }
