@@ -4,7 +4,11 @@
  * State: the head that explain gave the track updates it (the PKF in the configured linearisation,
  * through the motion model) when it lies inside the chi-square gate; a displaced one (beyond the
  * gate, within the motion model's outlier radius) is evidence that the person is there, not of
- * where. After every camera (mvt_body_one_view), a track whose head one camera alone placed this frame
+ * where. A head the model expects another body to hide or merge (mvt_body_shown: it shows as a top
+ * of its own with probability p / p_detect) takes its blob with the motion model's prior of a
+ * displaced point raised to 1 - (p / p_detect) (1 - p_outlier): such a blob's top is more often
+ * where the nearer body's outline ends, or the merged region's, than the head. How often hidden
+ * heads still show is learnt per camera (learn_detection). After every camera (mvt_body_one_view), a track whose head one camera alone placed this frame
  * takes that blob's feet where they are visible (mvt_body_feet_visible: not cut by the picture, no
  * other body's silhouette on the blob, the head not judged displaced): the point under the head on
  * the floor. With the head's ray they fix the distance along it, which is what one view leaves
@@ -190,49 +194,6 @@ static mvt_real extent_llr(const mvt_tracker_t *self, const mvt_view_t *view, in
     return llr;
 }
 
-/* Track t's head is blob d's top, and the blob's box also holds another likely-present body's
- * predicted head not clearly lower in the picture: the blob may be the two people's merged region,
- * whose top is the higher head or a point between two heads at about the same height. Seen from t,
- * the top is its head displaced by up to D toward the other head (D the two predictions' image
- * separation; the nearest such head counts): a uniform offset of second moment D D^T / 3 added to
- * the measurement covariance, so the update moves t along D only as far as the blob says. 1 when
- * cov is set. */
-static int merged_top_cov(const mvt_tracker_t *self, const mvt_view_t *view, int t, int d, const mvt_real S[3],
-                          mvt_real cov[3])
-{
-    const mvt_body_ws_t *ws = &self->body;
-    const mvt_real *box = view->det[d].box;
-    if (!mvt_trk_box_ok(box)) {
-        return 0;
-    }
-    const mvt_pkf_pred_t *a = &self->pred[t];
-    mvt_real best = MVT_R(-1.0);
-    for (int u = 0; u < MVT_MAX_TARGETS; u++) {
-        const mvt_track_t *o = &self->tracks[u];
-        if (u == t || o->id == 0 || o->dormant || !self->pred_ok[u] || !(o->exist_lo > MVT_R(0.0)) ||
-            !mvt_trk_in_box(box, ws->head[u], MVT_R(0.0), MVT_R(0.0))) {
-            continue;
-        }
-        const mvt_pkf_pred_t *b = &self->pred[u];
-        const mvt_real dx = b->h[0] - a->h[0], dy = b->h[1] - a->h[1];
-        if (dy > MVT_R(2.0) * MVT_SQRT(a->hph[2] + b->hph[2])) {
-            continue; /* clearly lower: the top is t's own */
-        }
-        const mvt_real det = S[0] * S[2] - S[1] * S[1];
-        if (!(det > MVT_R(0.0)) || (S[2] * dx * dx - MVT_R(2.0) * S[1] * dx * dy + S[0] * dy * dy) / det > self->cfg.gate_chi2) {
-            continue; /* outside t's gate: a top in the gate is t's own head, not that one's or between */
-        }
-        const mvt_real d2 = dx * dx + dy * dy;
-        if (best < MVT_R(0.0) || d2 < best) {
-            best = d2;
-            cov[0] = dx * dx / MVT_R(3.0);
-            cov[1] = dx * dy / MVT_R(3.0);
-            cov[2] = dy * dy / MVT_R(3.0);
-        }
-    }
-    return best > MVT_R(0.0);
-}
-
 /* Camera k updated track t's head; it placed it unless the motion model judged the head displaced. */
 static void mark_placed(mvt_track_t *tr, int k)
 {
@@ -317,12 +278,7 @@ void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_rea
             continue;
         }
         mvt_pkf_innov_t in;
-        mvt_real wide[3];
         mvt_err_t err = mvt_pkf_innovation_from(&self->pred[t], &self->meas[k][d], NULL, &in);
-        const mvt_real *extra = err == MVT_OK && merged_top_cov(self, view, t, d, in.S, wide) ? wide : NULL;
-        if (extra != NULL) {
-            err = mvt_pkf_innovation_from(&self->pred[t], &self->meas[k][d], extra, &in);
-        }
         if (err == MVT_OK) {
             const mvt_real uv[2] = {view->det[d].u, view->det[d].v};
             const mvt_real other = ws->frag_dens[d] - mvt_body_fragment_density(self, k, t, uv);
@@ -336,7 +292,7 @@ void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_rea
              * the model expects hidden is more likely another part of the body (its top where the
              * nearer body's outline ends, or the merged region's) */
             const mvt_real pk = self->p_detect_k[k];
-            err = mvt_trk_update_head(self, tr, k, &in, extra, pk > MVT_R(0.0) && p < pk ? p / pk : MVT_R(1.0));
+            err = mvt_trk_update_head(self, tr, k, &in, NULL, pk > MVT_R(0.0) && p < pk ? p / pk : MVT_R(1.0));
         }
         if (err != MVT_OK) {
             self->counters.numeric_faults++;
