@@ -22,7 +22,8 @@
  * never inside a body already there (two bodies cannot overlap: 2 body_halfwidth_m apart at least),
  * and never from a blob that lies in a newborn's silhouette below its head (its fragment). A
  * candidate that could be a tracked person whose existence has fallen under one half (within the
- * gate of both estimates) is that person found again: their track restarts there with its label.
+ * gate of both estimates, or closer than a body's width) is that person found again: their track
+ * restarts there with its label.
  * Cost O(C D) candidates, each O(C D); memory: the workspace's candidate array.
  */
 #include "mvt_body.h"
@@ -214,8 +215,10 @@ static int admissible(const mvt_tracker_t *self, const mvt_frame_t *frame, const
 }
 
 /* A track whose person is less likely there than not (it keeps its label while its existence lasts),
- * or a dormant one (mvt_body_prune.c), and whose estimate the candidate could be, within the 3-dof gate of both covariances: the
- * candidate is that person found again, not a new one. The estimate's covariance grows by walking
+ * or a dormant one (mvt_body_prune.c), and whose estimate the candidate could be, within the 3-dof
+ * gate of both covariances or where its body stands (closer than a body's width horizontally: two
+ * bodies cannot overlap, and a track that lost its person is often more sure of its place than it
+ * should be): the candidate is that person found again, not a new one. The estimate's covariance grows by walking
  * pace's reach since a camera last placed the head. The likeliest (existence times the candidate's
  * density under the estimate), or -1. */
 static int heir_of(const mvt_tracker_t *self, const mvt_body_cand_t *cand)
@@ -241,8 +244,9 @@ static int heir_of(const mvt_tracker_t *self, const mvt_body_cand_t *cand)
         }
         mvt_real det;
         const mvt_real d2 = mvt_trk_mahalanobis3(tr->s.x, P, cand->x, cand->P, &det);
-        if (!(d2 >= MVT_R(0.0)) || !(d2 < MVT_TRK_GATE3) || !(det > MVT_R(0.0))) {
-            continue;
+        const mvt_real sep = MVT_R(2.0) * self->cfg.body_halfwidth_m;
+        if (!(d2 >= MVT_R(0.0)) || !(det > MVT_R(0.0)) || (!(d2 < MVT_TRK_GATE3) && !(dist2_xy(tr->s.x, cand->x) < sep * sep))) {
+            continue; /* neither within the gate nor where its body stands (two bodies cannot overlap) */
         }
         /* the likeliest: the track's chance of being a person there (its existence) times the
          * candidate's density under it */
