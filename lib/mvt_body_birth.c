@@ -97,7 +97,7 @@ static mvt_real detect_prob(const mvt_tracker_t *self, const mvt_frame_t *frame,
         const mvt_detection_t *det = &frame->views[j].det[d];
         if (t >= 0 && self->tracks[t].exist_lo > MVT_R(0.0) && det->v <= uv[1] &&
             mvt_trk_in_box(det->box, uv, MVT_R(0.0), MVT_R(0.0))) {
-            return self->p_detect_k[j] * MVT_BODY_P_SHOWN_HIDDEN;
+            return self->p_detect_k[j] * self->p_hidden_k[j];
         }
     }
     return self->p_detect_k[j] * mvt_body_shown(self, j, axis, -1);

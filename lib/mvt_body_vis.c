@@ -5,7 +5,8 @@
  * A head in the picture is reported with p_detect. A body whose silhouette touches that of another
  * body (one more likely there than not) with a higher head is hidden behind it or merged into one
  * blob with it, whose reported top is the other head: its head shows as a top of its own only with
- * MVT_BODY_P_SHOWN_HIDDEN (mvt_body_shown). A head outside the picture, or behind the camera, is
+ * the camera's learnt rate of hidden heads shown (p_hidden_k, from MVT_BODY_P_SHOWN_HIDDEN;
+ * mvt_body_shown). A head outside the picture, or behind the camera, is
  * not reported at all. Where the camera sent its foreground mask and the mask holds nothing near
  * the predicted head, nothing hides the head there (a body in front of it, or one it merged with,
  * would be foreground): it is not hidden, and is reported with p_detect.
