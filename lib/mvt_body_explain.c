@@ -40,7 +40,7 @@
  * its body by a hole, is in no blob's point but stands out of the outline). The top must be no
  * blob's reported point (association had its say) and on no other likely-present body's
  * silhouette (where the outline is that body's). Fills ws->top[t]; 1 when found. */
-static int mask_head(mvt_tracker_t *self, const mvt_view_t *view, int k, int t)
+static int mask_head(mvt_tracker_t *self, const mvt_view_t *view, int k, int t, mvt_real uv[2])
 {
     const mvt_camera_t *cam = &self->cams[k];
     const mvt_track_t *tr = &self->tracks[t];
@@ -55,7 +55,6 @@ static int mask_head(mvt_tracker_t *self, const mvt_view_t *view, int k, int t)
     const mvt_real sig = MVT_SQRT(sig2);
     const mvt_real su = MVT_SQRT(p.hph[0] + sig2), sv = MVT_SQRT(p.hph[2] + sig2);
     const mvt_real px_per_m = cam->fx / p.depth_m;
-    mvt_real uv[2];
     if (!mvt_mask_fg_near(view->mask, p.h, MVT_R(3.0) * su) ||
         !mvt_mask_top_in_band(view->mask, p.h[0], px_per_m * MVT_TRK_HEAD_HALFWIDTH_M + su, p.h[1] - MVT_R(3.0) * sv,
                               p.h[1] + MVT_R(3.0) * sv, px_per_m * MVT_TRK_TOP_MAX_WIDTH_M + MVT_R(2.0) * s,
@@ -210,13 +209,31 @@ void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k)
             }
         }
     }
-    /* heads that stand out of the mask where no blob reports them */
+    /* heads that stand out of the mask where no blob reports them; a blob given as a head whose top
+     * lies clearly below such a head in the track's own column is not the head's (a head top has
+     * background above it): it is the body's piece under a cut, and the mask's top is the head */
     for (int i = 0; i < nr; i++) {
         const int t = rows[i];
         const int32_t st = self->tracks[t].status;
-        if (ws->assign[t] < 0 && self->tracks[t].exist_lo > MVT_R(0.0) &&
-            (st == MVT_TRACK_CONFIRMED || st == MVT_TRACK_COASTING)) {
-            ws->top_ok[t] = (uint8_t)mask_head(self, view, k, t);
+        if (!(self->tracks[t].exist_lo > MVT_R(0.0)) || (st != MVT_TRACK_CONFIRMED && st != MVT_TRACK_COASTING)) {
+            continue;
+        }
+        mvt_real uv[2];
+        const int d = ws->assign[t];
+        if (d < 0) {
+            ws->top_ok[t] = (uint8_t)mask_head(self, view, k, t, uv);
+        } else if (masked && mask_head(self, view, k, t, uv)) {
+            const mvt_real s = (mvt_real)view->mask->scale;
+            const mvt_real sig = MVT_SQRT(self->cams[k].sigma_px * self->cams[k].sigma_px + s * s);
+            const mvt_real gap = view->det[d].v - uv[1];
+            const mvt_real head_px = self->cams[k].fx * MVT_TRK_TOP_CLEAR_M / self->pred[t].depth_m;
+            if (gap > MVT_R(3.0) * sig && gap < head_px + MVT_R(3.0) * sig) {
+                ws->assign[t] = -1;
+                ws->head_of[k][d] = -1;
+                ws->frag[t] = (int16_t)d; /* owner stays t */
+                ws->top_ok[t] = 1;
+                self->counters.fragments++;
+            }
         }
     }
 }
