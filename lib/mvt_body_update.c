@@ -84,8 +84,24 @@ void mvt_body_one_view(mvt_tracker_t *self, const mvt_frame_t *frame)
         if (mvt_trk_popcount(tr->cameras_used) == 1) {
             feet_of_one_view(self, tr, t, frame);
         }
-        /* fewer than two views: the head's height stays within the person's (a one-view update
-         * slides along the ray, and with it the height) */
+        if (tr->cameras_used != 0u && tr->was_shown) {
+            /* one view placed a person shown before: their height is a measurement of the head's
+             * (a walking head bobs MVT_BODY_HEAD_BOB_M about it). One view's ray leaves the distance
+             * along it free, and the height fixes it: without it the head slides along the ray,
+             * and the height with it. The x and y rows carry no information (their variance is a
+             * room's, not a body's). */
+            const mvt_real big = MVT_R(1e4);
+            const mvt_real z[3] = {tr->s.x[0], tr->s.x[1], tr->seen_z};
+            const mvt_real R[9] = {big, MVT_R(0.0), MVT_R(0.0), MVT_R(0.0), big, MVT_R(0.0), MVT_R(0.0), MVT_R(0.0),
+                                   tr->seen_zz + MVT_BODY_HEAD_BOB_M * MVT_BODY_HEAD_BOB_M};
+            const mvt_err_t err = mvt_trk_update_point(self, tr, z, R);
+            if (err != MVT_OK && err != MVT_ERR_NUMERIC) {
+                self->counters.numeric_faults++;
+            }
+            continue;
+        }
+        /* nobody placed it, or a track not yet shown: the head's height stays within the person's
+         * (a truncation) */
         const mvt_real w = MVT_BODY_HEIGHT_BAND * MVT_SQRT(tr->seen_zz + MVT_BODY_HEAD_BOB_M * MVT_BODY_HEAD_BOB_M);
         const mvt_err_t err = mvt_trk_truncate(self, tr, Hz, tr->s.x[2], tr->seen_z - w, tr->seen_z + w);
         if (err != MVT_OK && err != MVT_ERR_NUMERIC) {
