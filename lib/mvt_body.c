@@ -244,12 +244,14 @@ mvt_err_t mvt_body_feet_innovation(const mvt_tracker_t *self, const mvt_cv_state
     const mvt_camera_t *cam = &self->cams[k];
     mvt_cv_state_t f = *s;
     f.x[2] = MVT_R(0.0);
-    /* the blob's lowest point is the body's edge nearest the camera, on the floor */
+    /* the blob's lowest point is the body's point on the floor nearest the camera, the camera's
+     * learnt distance ahead of the head's vertical */
+    const mvt_real ahead = self->foot_ahead_k[k] > MVT_R(0.0) ? self->foot_ahead_k[k] : MVT_BODY_FOOT_AHEAD_M;
     const mvt_real to_cam[2] = {cam->centre[0] - s->x[0], cam->centre[1] - s->x[1]};
     const mvt_real n = MVT_SQRT(to_cam[0] * to_cam[0] + to_cam[1] * to_cam[1]);
-    if (n > self->cfg.body_halfwidth_m) {
-        f.x[0] += self->cfg.body_halfwidth_m * to_cam[0] / n;
-        f.x[1] += self->cfg.body_halfwidth_m * to_cam[1] / n;
+    if (n > ahead) {
+        f.x[0] += ahead * to_cam[0] / n;
+        f.x[1] += ahead * to_cam[1] / n;
     }
     mvt_pkf_pred_t p;
     mvt_err_t err = mvt_pkf_predict_obs(&f, cam, MVT_PKF_JACOBIAN, &p);

@@ -72,6 +72,15 @@
  * floor up to MVT_BODY_P_SHOWN_HIDDEN_MAX. */
 #define MVT_BODY_P_SHOWN_HIDDEN MVT_R(0.02)
 #define MVT_BODY_P_SHOWN_HIDDEN_MAX MVT_R(0.9)
+/* A blob's lowest point is the body's point on the floor nearest the camera: this far (m) from the
+ * head's vertical toward the camera. Legs and feet are narrower than shoulders, so for a standing
+ * or walking person it is less than the body's half width. Learnt per camera from the feet of
+ * people whom two views place (whose head does not rest on the feet): the running mean of the
+ * offset of the feet's floor point along the camera's direction, MVT_BODY_FOOT_AHEAD_N samples
+ * long, from this prior and within 0..MVT_BODY_FOOT_AHEAD_MAX_M. */
+#define MVT_BODY_FOOT_AHEAD_M MVT_R(0.1)
+#define MVT_BODY_FOOT_AHEAD_MAX_M MVT_R(0.4)
+#define MVT_BODY_FOOT_AHEAD_N MVT_R(200.0)
 /* The probability that a blob's bottom, where nothing cuts it, is the person's feet (not a shadow,
  * a blob merged with the floor's reflection, legs the colour of the floor). */
 #define MVT_BODY_P_FEET MVT_R(0.9)

@@ -68,6 +68,42 @@ static void feet_of_one_view(mvt_tracker_t *self, mvt_track_t *tr, int t, const 
     }
 }
 
+/* Track t, placed by two or more views this frame (its head's place owes nothing to feet): for
+ * each of those views whose blob shows its feet, where the feet's ray meets the floor, ahead of the
+ * head's vertical toward the camera; learnt into the camera's foot_ahead_k. */
+static void learn_feet(mvt_tracker_t *self, const mvt_track_t *tr, int t, const mvt_frame_t *frame)
+{
+    for (int k = 0; k < self->num_cameras; k++) {
+        if (!(tr->cameras_placed & (1u << k))) {
+            continue;
+        }
+        const mvt_camera_t *cam = &self->cams[k];
+        for (int d = 0; d < self->num_meas[k]; d++) {
+            mvt_real uv[2], o[3], dir[3];
+            if (self->body.head_of[k][d] != t || !mvt_body_feet_visible(self, k, &frame->views[k].det[d], t, uv) ||
+                mvt_cam_ray(cam, uv, o, dir) != MVT_OK || !(dir[2] < MVT_R(-1e-3))) {
+                continue;
+            }
+            const mvt_real lam = -o[2] / dir[2];
+            const mvt_real g[2] = {o[0] + lam * dir[0] - tr->s.x[0], o[1] + lam * dir[1] - tr->s.x[1]};
+            const mvt_real to_cam[2] = {cam->centre[0] - tr->s.x[0], cam->centre[1] - tr->s.x[1]};
+            const mvt_real n = MVT_SQRT(to_cam[0] * to_cam[0] + to_cam[1] * to_cam[1]);
+            if (!(n > MVT_R(0.5))) {
+                continue;
+            }
+            const mvt_real ahead = (g[0] * to_cam[0] + g[1] * to_cam[1]) / n;
+            if (!(ahead > MVT_R(-MVT_BODY_FOOT_AHEAD_MAX_M)) || !(ahead < MVT_R(2.0) * MVT_BODY_FOOT_AHEAD_MAX_M)) {
+                continue; /* not this body's feet (another's legs, a shadow): no sample */
+            }
+            mvt_real *f = &self->foot_ahead_k[k];
+            const mvt_real prev = *f > MVT_R(0.0) ? *f : MVT_BODY_FOOT_AHEAD_M;
+            mvt_real next = prev + (ahead - prev) / MVT_BODY_FOOT_AHEAD_N;
+            next = next < MVT_R(1e-3) ? MVT_R(1e-3) : (next > MVT_BODY_FOOT_AHEAD_MAX_M ? MVT_BODY_FOOT_AHEAD_MAX_M : next);
+            *f = next;
+        }
+    }
+}
+
 void mvt_body_one_view(mvt_tracker_t *self, const mvt_frame_t *frame)
 {
     static const mvt_real Hz[3] = {MVT_R(0.0), MVT_R(0.0), MVT_R(1.0)};
@@ -79,6 +115,7 @@ void mvt_body_one_view(mvt_tracker_t *self, const mvt_frame_t *frame)
         if (mvt_trk_popcount(tr->cameras_placed) >= 2) {
             tr->seen_z = tr->s.x[2]; /* the person's height, where two views' rays meet */
             tr->seen_zz = tr->s.P[14];
+            learn_feet(self, tr, t, frame);
             continue;
         }
         if (mvt_trk_popcount(tr->cameras_used) == 1) {

@@ -477,6 +477,9 @@ typedef struct mvt_tracker {
                                             frame, learnt (mvt_body.c) */
     mvt_real p_detect_k[MVT_MAX_CAMERAS]; /* ... and its detection probability of a visible head,
                                              learnt (mvt_body_update.c); 0: not yet */
+    mvt_real foot_ahead_k[MVT_MAX_CAMERAS]; /* ... how far toward it from the head's vertical a blob's
+                                               lowest point lies on the floor, m, learnt
+                                               (mvt_body_update.c); 0: not yet */
     mvt_real p_hidden_k[MVT_MAX_CAMERAS]; /* ... and the chance that a head another body hides or
                                              merges shows as a blob top of its own, learnt
                                              (mvt_body_update.c); 0: not yet */
@@ -524,6 +527,7 @@ typedef struct mvt_tracker_persist {
     mvt_real clutter_n[MVT_MAX_CAMERAS];
     mvt_real p_detect_k[MVT_MAX_CAMERAS];
     mvt_real p_hidden_k[MVT_MAX_CAMERAS];
+    mvt_real foot_ahead_k[MVT_MAX_CAMERAS];
     mvt_real frag_n[MVT_MAX_CAMERAS];
 } mvt_tracker_persist_t;
 
