@@ -177,8 +177,8 @@ mvt_err_t mvt_body_feet_innovation(const mvt_tracker_t *self, const mvt_cv_state
  * own, given the bodies tracked there (ws.axis of this camera; track self_t, or -1, excluded):
  * every body more likely present than not whose silhouette touches this one and whose head is
  * higher in the picture makes the blob's top its own (a nearer body hides the head, or the two
- * merge into one blob), and lowers the chance to camera k's learnt rate of hidden heads shown (MVT_BODY_P_SHOWN_HIDDEN)
- * by its existence. O(T). */
+ * merge into one blob), and lowers the chance to camera k's learnt rate of hidden heads shown
+ * (from MVT_BODY_P_SHOWN_HIDDEN) by its existence. O(T). */
 mvt_real mvt_body_shown(const mvt_tracker_t *self, int k, const mvt_real axis[MVT_BODY_AXIS_N], int self_t);
 
 /* The density (1/px^2) of a head's detection at innovation in, as the motion model weighs it

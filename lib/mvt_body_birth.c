@@ -218,9 +218,9 @@ static int admissible(const mvt_tracker_t *self, const mvt_frame_t *frame, const
  * or a dormant one (mvt_body_prune.c), and whose estimate the candidate could be, within the 3-dof
  * gate of both covariances or where its body stands (closer than a body's width horizontally: two
  * bodies cannot overlap, and a track that lost its person is often more sure of its place than it
- * should be): the candidate is that person found again, not a new one. The estimate's covariance grows by walking
- * pace's reach since a camera last placed the head. The likeliest (existence times the candidate's
- * density under the estimate), or -1. */
+ * should be): the candidate is that person found again, not a new one. The estimate's covariance
+ * grows by walking pace's reach since a camera last placed the head. The likeliest (existence times
+ * the candidate's density under the estimate), or -1. */
 static int heir_of(const mvt_tracker_t *self, const mvt_body_cand_t *cand)
 {
     int best = -1;
@@ -245,7 +245,8 @@ static int heir_of(const mvt_tracker_t *self, const mvt_body_cand_t *cand)
         mvt_real det;
         const mvt_real d2 = mvt_trk_mahalanobis3(tr->s.x, P, cand->x, cand->P, &det);
         const mvt_real sep = MVT_R(2.0) * self->cfg.body_halfwidth_m;
-        if (!(d2 >= MVT_R(0.0)) || !(det > MVT_R(0.0)) || (!(d2 < MVT_TRK_GATE3) && !(dist2_xy(tr->s.x, cand->x) < sep * sep))) {
+        if (!(d2 >= MVT_R(0.0)) || !(det > MVT_R(0.0)) ||
+            (!(d2 < MVT_TRK_GATE3) && !(dist2_xy(tr->s.x, cand->x) < sep * sep))) {
             continue; /* neither within the gate nor where its body stands (two bodies cannot overlap) */
         }
         /* the likeliest: the track's chance of being a person there (its existence) times the

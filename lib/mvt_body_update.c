@@ -8,15 +8,19 @@
  * of its own with probability p / p_detect) takes its blob with the motion model's prior of a
  * displaced point raised to 1 - (p / p_detect) (1 - p_outlier): such a blob's top is more often
  * where the nearer body's outline ends, or the merged region's, than the head. How often hidden
- * heads still show is learnt per camera (learn_detection). After every camera (mvt_body_one_view), a track whose head one camera alone placed this frame
+ * heads still show is learnt per camera (learn_detection).
+ * After every camera (mvt_body_one_view), a track whose head one camera alone placed this frame
  * takes that blob's feet where they are visible (mvt_body_feet_visible: not cut by the picture, no
- * other body's silhouette on the blob, the head not judged displaced): the point under the head on
- * the floor. With the head's ray they fix the distance along it, which is what one view leaves
- * open; where two or more views place the head, their rays do, and feet (whose offset from the
- * head's vertical is a body's, not a pixel's) measured worse there (docs/body-model.md). The
- * person's height is the head's height the last frame two views placed it (or its birth's); a track
- * fewer views place keeps its head within MVT_BODY_HEIGHT_BAND spreads of it (a truncation): one
- * view's update slides the head along the ray, and the height with it.
+ * other body's silhouette on the blob, the head not judged displaced): the body's point on the
+ * floor nearest the camera, the camera's learnt distance ahead of the head's vertical (learn_feet,
+ * from people two views place). With the head's ray they fix the distance along it, which is what
+ * one view leaves open; where two or more views place the head, their rays do, and feet (whose
+ * offset from the head's vertical is a body's, not a pixel's) measured worse there
+ * (docs/body-model.md). The person's height is the head's height the last frame two views placed it
+ * (or its birth's); a person shown before whom one view places takes it as a measurement of the
+ * head's (a walking head's bob about it), and any other track fewer than two views place keeps its
+ * head within MVT_BODY_HEIGHT_BAND spreads of it (a truncation): one view's update slides the head
+ * along the ray, and the height with it.
  * Existence (the integrated PDA's recursion with this camera's detection probability p):
  *   head detected with density N (its own, or    odds *= 1 - p + p N / (lambda + phi), phi the
  *   displaced: mvt_body_head_density)            density of other bodies' fragments at the blob
@@ -92,13 +96,14 @@ static void learn_feet(mvt_tracker_t *self, const mvt_track_t *tr, int t, const 
                 continue;
             }
             const mvt_real ahead = (g[0] * to_cam[0] + g[1] * to_cam[1]) / n;
-            if (!(ahead > MVT_R(-MVT_BODY_FOOT_AHEAD_MAX_M)) || !(ahead < MVT_R(2.0) * MVT_BODY_FOOT_AHEAD_MAX_M)) {
+            if (!(ahead > -MVT_BODY_FOOT_AHEAD_MAX_M) || !(ahead < MVT_R(2.0) * MVT_BODY_FOOT_AHEAD_MAX_M)) {
                 continue; /* not this body's feet (another's legs, a shadow): no sample */
             }
             mvt_real *f = &self->foot_ahead_k[k];
             const mvt_real prev = *f > MVT_R(0.0) ? *f : MVT_BODY_FOOT_AHEAD_M;
             mvt_real next = prev + (ahead - prev) / MVT_BODY_FOOT_AHEAD_N;
-            next = next < MVT_R(1e-3) ? MVT_R(1e-3) : (next > MVT_BODY_FOOT_AHEAD_MAX_M ? MVT_BODY_FOOT_AHEAD_MAX_M : next);
+            next = next < MVT_R(1e-3) ? MVT_R(1e-3)
+                                      : (next > MVT_BODY_FOOT_AHEAD_MAX_M ? MVT_BODY_FOOT_AHEAD_MAX_M : next);
             *f = next;
         }
     }
@@ -283,7 +288,8 @@ static void learn_detection(mvt_tracker_t *self, int k, mvt_real dt)
         const mvt_real a = MVT_R(1.0) - MVT_EXP(-dt * (mvt_real)n_hidden / MVT_BODY_PD_S);
         const mvt_real rate = (mvt_real)hits_hidden / (mvt_real)n_hidden / self->p_detect_k[k];
         mvt_real q = self->p_hidden_k[k] + a * (rate - self->p_hidden_k[k]);
-        q = q < MVT_BODY_P_SHOWN_HIDDEN ? MVT_BODY_P_SHOWN_HIDDEN : (q > MVT_BODY_P_SHOWN_HIDDEN_MAX ? MVT_BODY_P_SHOWN_HIDDEN_MAX : q);
+        q = q < MVT_BODY_P_SHOWN_HIDDEN ? MVT_BODY_P_SHOWN_HIDDEN
+                                        : (q > MVT_BODY_P_SHOWN_HIDDEN_MAX ? MVT_BODY_P_SHOWN_HIDDEN_MAX : q);
         self->p_hidden_k[k] = q;
     }
     if (n == 0) {
