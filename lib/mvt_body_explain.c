@@ -20,7 +20,8 @@
  * body explains (its head or its fragment tops it), under that top, and on the blob's foreground
  * where the camera sent its mask, may be inside that blob: the blob is its host.
  * Mask tops: a shown track with no blob for its head takes the mask's top in its own column as
- * its head where there is one (mask_head).
+ * its head where there is one (mask_head); one whose blob's top lies clearly below that top, within
+ * a head's height, takes it too, and the blob is its piece under a cut.
  * Cost O(T D) gating + O(T^2 (T + D)) assignment + the mask tops' bands; memory: the tracker's
  * workspaces.
  */
@@ -34,12 +35,14 @@
 /* Gains are offset by this constant to make the solver's costs non-negative (it forbids < 0). */
 #define GAIN_OFFSET MVT_R(1000.0)
 
-/* Track t, likely present, with no blob of camera k for its head: where the camera sent its
- * foreground mask, the head is the mask's top in its own column when there is one (a blob reports
+/* Track t, likely present: where camera k sent its foreground mask, the head is the mask's top in
+ * its own column when there is one (a blob reports
  * one top, the top-most of the region, so the head of a person merged with another, or cut from
  * its body by a hole, is in no blob's point but stands out of the outline). The top must be no
  * blob's reported point (association had its say) and on no other likely-present body's
- * silhouette (where the outline is that body's). Fills ws->top[t]; 1 when found. */
+ * silhouette (where the outline is that body's). Asked of a track with no blob for its head, and of
+ * one whose blob's top may be a cut below its head. Fills ws->top[t] and uv (raw pixels); 1 when
+ * found. */
 static int mask_head(mvt_tracker_t *self, const mvt_view_t *view, int k, int t, mvt_real uv[2])
 {
     const mvt_camera_t *cam = &self->cams[k];
