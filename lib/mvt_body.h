@@ -86,6 +86,9 @@
 #define MVT_BODY_P_FEET MVT_R(0.9)
 /* A blob's box within this many pixels of the picture's edge is cut by it. */
 #define MVT_BODY_EDGE_PX MVT_R(2.0)
+/* A merged blob's edge that one body's silhouette alone puts there measures that edge of the body
+ * when it lies within this many squared standard deviations of it (chi-square, 1 dof, 99.7 %). */
+#define MVT_BODY_EDGE_GATE MVT_R(9.0)
 /* A fragment's top lies at least this share of the silhouette's height below the head's top (a
  * blob at the head's own height beside it is not the body's). */
 #define MVT_BODY_FRAGMENT_BELOW MVT_R(0.08)

@@ -31,8 +31,11 @@
  *   head missed, a fragment of the body in view  odds unchanged (the body is there; its head's
  *                                                blob is not, for reasons the model does not hold),
  *                                                and the head's column stays between its sides
- *   head missed inside a merged blob (its host)   odds *= 1 - p MVT_BODY_P_SHOWN_HIDDEN, and the
- *                                                head's column stays between the blob's sides
+ *   head missed inside a merged blob (its host)   odds *= 1 - p MVT_BODY_P_SHOWN_HIDDEN times the
+ *                                                likelihood ratio of the blob's extent (extent_llr);
+ *                                                the head's column stays between the blob's sides,
+ *                                                and each edge of the blob that its silhouette alone
+ *                                                puts there measures that edge (host_edges)
  *   head missed                                   odds *= 1 - p
  * Cost O(T) updates; memory: none beyond the tracker.
  */
@@ -202,16 +205,15 @@ static mvt_real edge_llr(mvt_real e, mvt_real a, mvt_real b, mvt_real s2, mvt_re
  * whose top the blob reports), < 0 where t's body would stick out of it, 0 where the others fill
  * t's silhouette either way (right behind another: no information). Edges at the picture's border,
  * where the box is cut, say nothing. */
-static mvt_real extent_llr(const mvt_tracker_t *self, const mvt_view_t *view, int k, int t, int d)
+/* The union of the silhouettes of the likely-present bodies other than t whose heads blob d of
+ * camera k holds (u0 v0 u1 v1; u1 < u0 when there is none). */
+static void others_in_blob(const mvt_tracker_t *self, int k, int t, const mvt_real b[4], mvt_real all[4])
 {
-    const mvt_camera_t *cam = &self->cams[k];
     const mvt_body_ws_t *ws = &self->body;
-    const mvt_real *b = view->det[d].box, *sil_t = ws->sil[k][t];
-    const mvt_pkf_pred_t *p = &self->pred[t];
-    if (!mvt_trk_box_ok(b) || !(sil_t[2] > sil_t[0]) || !(p->depth_m > MVT_R(0.0))) {
-        return MVT_R(0.0);
-    }
-    mvt_real all[4] = {MVT_R(0.0), MVT_R(0.0), MVT_R(0.0), MVT_R(0.0)};
+    all[0] = MVT_R(1.0);
+    all[1] = MVT_R(0.0);
+    all[2] = MVT_R(0.0);
+    all[3] = MVT_R(0.0);
     int n = 0;
     for (int j = 0; j < MVT_MAX_TARGETS; j++) {
         const mvt_real *sj = ws->sil[k][j];
@@ -229,27 +231,149 @@ static mvt_real extent_llr(const mvt_tracker_t *self, const mvt_view_t *view, in
             all[3] = sj[3] > all[3] ? sj[3] : all[3];
         }
     }
-    if (n == 0) {
-        return MVT_R(0.0);
-    }
+}
+
+/* A hosting blob's edges' noise about the silhouette's: the blob's pixels, EXTENT_SD_M at t's depth
+ * and (s2u, s2v) t's predicted spread; q the chance that an edge is the segmentation's, not the
+ * body's: this camera's fragments per body. */
+typedef struct {
+    mvt_real r;    /* px^2, without t's spread */
+    mvt_real s2u;  /* px^2, horizontal edges' innovation variance */
+    mvt_real s2v;  /* px^2, the bottom's */
+    mvt_real q;
+} edge_noise_t;
+
+static edge_noise_t edge_noise(const mvt_tracker_t *self, int k, int t, int d)
+{
+    const mvt_camera_t *cam = &self->cams[k];
+    const mvt_pkf_pred_t *p = &self->pred[t];
     const mvt_real wsd = cam->fx * EXTENT_SD_M / p->depth_m;
     const mvt_real var = self->meas_ok[k][d] ? self->meas[k][d].var_px2 : cam->sigma_px * cam->sigma_px;
-    const mvt_real s2u = var + wsd * wsd + p->hph[0], s2v = var + wsd * wsd + p->hph[2];
-    /* the chance that an edge is the segmentation's, not the body's: this camera's fragments per body */
     const mvt_real fq = self->frag_n[k] < MVT_R(0.9) ? self->frag_n[k] : MVT_R(0.9);
-    const mvt_real q = fq > MVT_BODY_FRAGMENTS_MIN ? fq : MVT_BODY_FRAGMENTS_MIN;
+    edge_noise_t n;
+    n.r = var + wsd * wsd;
+    n.s2u = n.r + p->hph[0];
+    n.s2v = n.r + p->hph[2];
+    n.q = fq > MVT_BODY_FRAGMENTS_MIN ? fq : MVT_BODY_FRAGMENTS_MIN;
+    return n;
+}
+
+/* Track t hosted by blob d of camera k: the blob's box is the union of the silhouettes of the people
+ * in it. Its left, right and bottom edges predicted from the other likely-present bodies whose heads
+ * the box holds, with and without t's silhouette, each with the blob's noise, EXTENT_SD_M at t's
+ * depth and t's predicted spread: the log-likelihood ratio of t in the blob against t absent. > 0
+ * where the box reaches out where only t's body puts it (a person beside or in front of the one
+ * whose top the blob reports), < 0 where t's body would stick out of it, 0 where the others fill
+ * t's silhouette either way (right behind another: no information). Edges at the picture's border,
+ * where the box is cut, say nothing. */
+static mvt_real extent_llr(const mvt_tracker_t *self, const mvt_view_t *view, int k, int t, int d)
+{
+    const mvt_camera_t *cam = &self->cams[k];
+    const mvt_body_ws_t *ws = &self->body;
+    const mvt_real *b = view->det[d].box, *sil_t = ws->sil[k][t];
+    if (!mvt_trk_box_ok(b) || !(sil_t[2] > sil_t[0]) || !(self->pred[t].depth_m > MVT_R(0.0))) {
+        return MVT_R(0.0);
+    }
+    mvt_real all[4];
+    others_in_blob(self, k, t, b, all);
+    if (!(all[2] > all[0])) {
+        return MVT_R(0.0);
+    }
+    const edge_noise_t en = edge_noise(self, k, t, d);
     const mvt_real W = (mvt_real)cam->width, H = (mvt_real)cam->height;
     mvt_real llr = MVT_R(0.0);
     if (b[0] > MVT_BODY_EDGE_PX && sil_t[0] < all[0]) {
-        llr += edge_llr(b[0], sil_t[0], all[0], s2u, q, W);
+        llr += edge_llr(b[0], sil_t[0], all[0], en.s2u, en.q, W);
     }
     if (b[2] < W - MVT_R(1.0) - MVT_BODY_EDGE_PX && sil_t[2] > all[2]) {
-        llr += edge_llr(b[2], sil_t[2], all[2], s2u, q, W);
+        llr += edge_llr(b[2], sil_t[2], all[2], en.s2u, en.q, W);
     }
     if (b[3] < H - MVT_R(1.0) - MVT_BODY_EDGE_PX && sil_t[3] > all[3]) {
-        llr += edge_llr(b[3], sil_t[3], all[3], s2v, q, H);
+        llr += edge_llr(b[3], sil_t[3], all[3], en.s2v, en.q, H);
     }
     return llr;
+}
+
+/* H P H^T of one row H on the position of the 6-state covariance P. */
+static mvt_real hph3(const mvt_real H[3], const mvt_real P[36])
+{
+    mvt_real v = MVT_R(0.0);
+    for (int r = 0; r < 3; r++) {
+        for (int c = 0; c < 3; c++) {
+            v += H[r] * P[r * 6 + c] * H[c];
+        }
+    }
+    return v;
+}
+
+/* One edge of a hosting blob that t's silhouette alone puts there (innovation y, row H of the
+ * position, noise r, innovation variance s2): a scalar measurement of t, taken when the edge is
+ * more likely the body's than the segmentation's (the Gaussian against q spread over n pixels) and
+ * inside the gate. The other row of the pixel update is empty (H 0, innovation 0). */
+static void update_edge(mvt_tracker_t *self, mvt_track_t *tr, const mvt_real Hrow[3], mvt_real y, mvt_real r,
+                        mvt_real s2, mvt_real q, mvt_real n)
+{
+    const mvt_real g = (MVT_R(1.0) - q) * MVT_EXP(MVT_R(-0.5) * y * y / s2) / MVT_SQRT(MVT_R(6.2831853) * s2);
+    if (!(y * y <= MVT_BODY_EDGE_GATE * s2) || !(g > q / n)) {
+        return;
+    }
+    mvt_pkf_innov_t in;
+    in.y[0] = y;
+    in.y[1] = MVT_R(0.0);
+    for (int c = 0; c < 3; c++) {
+        in.H[c] = Hrow[c];
+        in.H[3 + c] = MVT_R(0.0);
+    }
+    in.r = r;
+    in.S[0] = s2;
+    in.S[1] = MVT_R(0.0);
+    in.S[2] = r;
+    in.d2 = y * y / s2;
+    if (mvt_trk_update_pixels(self, tr, &in) == MVT_OK) {
+        self->counters.occluded_updates++;
+    } else {
+        self->counters.numeric_faults++;
+    }
+}
+
+/* Track t hosted by blob d of camera k: each of the box's edges that t's silhouette alone puts there
+ * (it reaches beyond every other body the blob holds) measures that edge of t's silhouette: the
+ * sides its column, the bottom its feet (the body's point on the floor nearest the camera), which
+ * a merged blob shows when t is the nearest body in it. */
+static void host_edges(mvt_tracker_t *self, mvt_track_t *tr, const mvt_view_t *view, int k, int t, int d)
+{
+    const mvt_camera_t *cam = &self->cams[k];
+    const mvt_real *b = view->det[d].box;
+    const mvt_real *sil_t = self->body.sil[k][t];
+    if (!mvt_trk_box_ok(b) || !(sil_t[2] > sil_t[0]) || !(self->pred[t].depth_m > MVT_R(0.0))) {
+        return;
+    }
+    mvt_real all[4];
+    others_in_blob(self, k, t, b, all);
+    if (!(all[2] > all[0])) {
+        return;
+    }
+    const edge_noise_t en = edge_noise(self, k, t, d);
+    const mvt_real W = (mvt_real)cam->width, Hpx = (mvt_real)cam->height;
+    const mvt_real *Hu = self->pred[t].H;
+    const mvt_real margin = MVT_R(2.0) * MVT_SQRT(en.s2u);
+    const mvt_real x0[3] = {tr->s.x[0], tr->s.x[1], tr->s.x[2]};
+    if (b[0] > MVT_BODY_EDGE_PX && sil_t[0] < all[0] - margin) {
+        update_edge(self, tr, Hu, b[0] - sil_t[0], en.r, en.s2u, en.q, W);
+    }
+    if (b[2] < W - MVT_R(1.0) - MVT_BODY_EDGE_PX && sil_t[2] > all[2] + margin) {
+        /* after the left side's update: its shift of the prediction, and the spread it left */
+        const mvt_real shift = Hu[0] * (tr->s.x[0] - x0[0]) + Hu[1] * (tr->s.x[1] - x0[1]) + Hu[2] * (tr->s.x[2] - x0[2]);
+        update_edge(self, tr, Hu, b[2] - sil_t[2] - shift, en.r, en.r + hph3(Hu, tr->s.P), en.q, W);
+    }
+    if (b[3] < Hpx - MVT_R(1.0) - MVT_BODY_EDGE_PX && sil_t[3] > all[3] + MVT_R(2.0) * MVT_SQRT(en.s2v)) {
+        const mvt_real uv[2] = {MVT_R(0.5) * (sil_t[0] + sil_t[2]), b[3]};
+        mvt_pkf_innov_t in;
+        if (mvt_body_feet_innovation(self, &tr->s, k, uv, &in) == MVT_OK) {
+            const mvt_real Hv[3] = {in.H[3], in.H[4], in.H[5]};
+            update_edge(self, tr, Hv, in.y[1], in.r, in.S[2], en.q, Hpx);
+        }
+    }
 }
 
 /* Camera k updated track t's head; it placed it unless the motion model judged the head displaced. */
@@ -329,6 +453,7 @@ void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_rea
             if (ws->host[t] >= 0) {
                 tr->exist_lo += MVT_LOG(MVT_R(1.0) - p * MVT_BODY_P_SHOWN_HIDDEN) + extent_llr(self, view, k, t, ws->host[t]);
                 keep_in_blob(self, tr, k, &view->det[ws->host[t]]);
+                host_edges(self, tr, view, k, t, ws->host[t]);
             } else if (ws->frag[t] >= 0) {
                 keep_in_blob(self, tr, k, &view->det[ws->frag[t]]); /* the piece holds the body's column */
             } else {
