@@ -336,10 +336,17 @@ static void update_edge(mvt_tracker_t *self, mvt_track_t *tr, const mvt_real Hro
     }
 }
 
+/* Edge e lies nearer t's predicted edge a than the others' b: t's body, not theirs, explains it. */
+static int nearer(mvt_real e, mvt_real a, mvt_real b)
+{
+    return (e - a) * (e - a) < (e - b) * (e - b);
+}
+
 /* Track t hosted by blob d of camera k: each of the box's edges that t's silhouette alone puts there
- * (it reaches beyond every other body the blob holds) measures that edge of t's silhouette: the
- * sides its column, the bottom its feet (the body's point on the floor nearest the camera), which
- * a merged blob shows when t is the nearest body in it. */
+ * (it reaches beyond every other body the blob holds by two spreads, and the edge lies nearer t's
+ * than theirs) measures that edge of t's silhouette: the sides its column, the bottom its feet (the
+ * body's point on the floor nearest the camera), which a merged blob shows when t is the nearest
+ * body in it. */
 static void host_edges(mvt_tracker_t *self, mvt_track_t *tr, const mvt_view_t *view, int k, int t, int d)
 {
     const mvt_camera_t *cam = &self->cams[k];
@@ -353,20 +360,25 @@ static void host_edges(mvt_tracker_t *self, mvt_track_t *tr, const mvt_view_t *v
     if (!(all[2] > all[0])) {
         return;
     }
+    mvt_pkf_pred_t p; /* raw pixels, as the silhouettes */
+    if (mvt_pkf_predict_obs(&tr->s, cam, MVT_PKF_JACOBIAN, &p) != MVT_OK) {
+        return;
+    }
     const edge_noise_t en = edge_noise(self, k, t, d);
     const mvt_real W = (mvt_real)cam->width, Hpx = (mvt_real)cam->height;
-    const mvt_real *Hu = self->pred[t].H;
+    const mvt_real *Hu = p.H;
     const mvt_real margin = MVT_R(2.0) * MVT_SQRT(en.s2u);
     const mvt_real x0[3] = {tr->s.x[0], tr->s.x[1], tr->s.x[2]};
-    if (b[0] > MVT_BODY_EDGE_PX && sil_t[0] < all[0] - margin) {
+    if (b[0] > MVT_BODY_EDGE_PX && sil_t[0] < all[0] - margin && nearer(b[0], sil_t[0], all[0])) {
         update_edge(self, tr, Hu, b[0] - sil_t[0], en.r, en.s2u, en.q, W);
     }
-    if (b[2] < W - MVT_R(1.0) - MVT_BODY_EDGE_PX && sil_t[2] > all[2] + margin) {
+    if (b[2] < W - MVT_R(1.0) - MVT_BODY_EDGE_PX && sil_t[2] > all[2] + margin && nearer(b[2], sil_t[2], all[2])) {
         /* after the left side's update: its shift of the prediction, and the spread it left */
         const mvt_real shift = Hu[0] * (tr->s.x[0] - x0[0]) + Hu[1] * (tr->s.x[1] - x0[1]) + Hu[2] * (tr->s.x[2] - x0[2]);
         update_edge(self, tr, Hu, b[2] - sil_t[2] - shift, en.r, en.r + hph3(Hu, tr->s.P), en.q, W);
     }
-    if (b[3] < Hpx - MVT_R(1.0) - MVT_BODY_EDGE_PX && sil_t[3] > all[3] + MVT_R(2.0) * MVT_SQRT(en.s2v)) {
+    if (b[3] < Hpx - MVT_R(1.0) - MVT_BODY_EDGE_PX && sil_t[3] > all[3] + MVT_R(2.0) * MVT_SQRT(en.s2v) &&
+        nearer(b[3], sil_t[3], all[3])) {
         const mvt_real uv[2] = {MVT_R(0.5) * (sil_t[0] + sil_t[2]), b[3]};
         mvt_pkf_innov_t in;
         if (mvt_body_feet_innovation(self, &tr->s, k, uv, &in) == MVT_OK) {
