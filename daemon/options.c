@@ -270,7 +270,7 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
     const char *rig_path = NULL, *in_url = MVTD_DEFAULT_URL, *out_url = NULL, *mode = "pkf", *gate = "chi2",
                *merge = "neither", *occlusion = "box", *particle_model = "column",
                *state_path = NULL, *motion = NULL, *models = NULL, *pixels = "shared",
-               *lifecycle = "rules";
+               *lifecycle = "body";
     int q_given = 0;
     double sigma_px = 2.0, deadline_ms = 20.0, gate_chi2 = 13.8;
     mvt_real q[3] = {MVT_R(0.5), MVT_R(0.5), MVT_R(0.05)};
@@ -461,6 +461,7 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
         pcfg.det = cfg;
         /* the particle filter's blob tracker only proposes births: it keeps the lifecycle its
          * figures were measured with (docs/particle-filter.md); exclusion is the particles' own */
+        pcfg.det.lifecycle = MVT_LIFECYCLE_RULES;
         pcfg.det.occlusion = 0;
         pcfg.det.exclusion_m = 0;
         pcfg.num_particles = (int)particles;

@@ -373,6 +373,19 @@ void mvt_body_step(mvt_tracker_t *self, const mvt_frame_t *frame, const int orde
         }
     }
     mvt_body_existence(self, dt);
+    if (dt * self->cfg.init_vel_std_ms > MVT_R(2.0) * self->cfg.body_halfwidth_m) {
+        /* nobody watched for longer than a person takes to walk a body's width (the daemon was
+         * down, every camera dropped): where each person is now is the views' to say, and who is
+         * who the heights' and the reach's (mvt_body_birth.c: the persons found again, paired all
+         * at once) */
+        for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+            mvt_track_t *tr = &self->tracks[t];
+            if (tr->id != 0 && !tr->dormant && tr->was_shown) {
+                tr->dormant = 1;
+                tr->status = MVT_TRACK_TENTATIVE;
+            }
+        }
+    }
     for (int oi = 0; oi < n_order; oi++) {
         const int k = order[oi];
         const mvt_view_t *view = &frame->views[k];

@@ -199,7 +199,7 @@ static int admissible(const mvt_tracker_t *self, const mvt_frame_t *frame, const
     const mvt_real sep = MVT_R(2.0) * self->cfg.body_halfwidth_m;
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         const mvt_track_t *tr = &self->tracks[t];
-        if (tr->id != 0 && tr->exist_lo > MVT_R(0.0) && dist2_xy(tr->s.x, cand->x) < sep * sep) {
+        if (tr->id != 0 && !tr->dormant && tr->exist_lo > MVT_R(0.0) && dist2_xy(tr->s.x, cand->x) < sep * sep) {
             return 0;
         }
     }
@@ -214,13 +214,78 @@ static int admissible(const mvt_tracker_t *self, const mvt_frame_t *frame, const
     return 1;
 }
 
-/* A track whose person is less likely there than not (it keeps its label while its existence lasts),
- * or a dormant one (mvt_body_prune.c), and whose estimate the candidate could be, within the 3-dof
- * gate of both covariances or where its body stands (closer than a body's width horizontally: two
- * bodies cannot overlap, and a track that lost its person is often more sure of its place than it
- * should be): the candidate is that person found again, not a new one. The estimate's covariance
- * grows by walking pace's reach since a camera last placed the head. The likeliest (existence times
- * the candidate's density under the estimate), or -1. */
+/* Track tr's estimate's position covariance, widened by walking pace's reach since a camera last
+ * placed its head (hidden, asleep: nobody saw where the person walked; asleep, at least half a
+ * second's, the time it takes to fall asleep). */
+static void widened(const mvt_tracker_t *self, const mvt_track_t *tr, mvt_real P[9])
+{
+    const mvt_real *S = tr->s.P;
+    const int at[9] = {0, 1, 2, 6, 7, 8, 12, 13, 14};
+    for (int i = 0; i < 9; i++) {
+        P[i] = S[at[i]];
+    }
+    mvt_real since = mvt_us_to_s(self->last_utime_us - tr->last_update_us);
+    since = since > MVT_R(0.5) || !tr->dormant ? since : MVT_R(0.5);
+    const mvt_real reach = self->cfg.init_vel_std_ms * since;
+    P[0] += reach * reach;
+    P[4] += reach * reach;
+}
+
+static void label_of(const mvt_tracker_t *self, const mvt_track_t *tr, mvt_body_label_t *L)
+{
+    L->id = tr->id;
+    L->status = tr->status;
+    L->was_shown = tr->was_shown;
+    L->dormant = tr->dormant;
+    L->app = tr->app;
+    L->seen_z = tr->seen_z;
+    L->seen_zz = tr->seen_zz;
+    L->exist_lo = tr->exist_lo;
+    for (int i = 0; i < 3; i++) {
+        L->x[i] = tr->s.x[i];
+    }
+    widened(self, tr, L->P);
+    if (tr->seen_zz > MVT_R(0.0)) {
+        /* the head's height is the person's (a walking head's bob about it), which the motion
+         * model's vertical noise forgets over an outage */
+        L->x[2] = tr->seen_z;
+        L->P[2] = L->P[5] = L->P[6] = L->P[7] = MVT_R(0.0);
+        L->P[8] = tr->seen_zz + MVT_BODY_HEAD_BOB_M * MVT_BODY_HEAD_BOB_M;
+    }
+}
+
+/* Label L onto the track restarted at candidate cand: the same person, whose label, status, colour
+ * and height stay while the estimate starts again. */
+static void give_label(mvt_track_t *tr, const mvt_body_label_t *L, const mvt_body_cand_t *cand)
+{
+    tr->id = L->id;
+    tr->status = L->was_shown ? MVT_TRACK_CONFIRMED : L->status; /* shown before */
+    tr->was_shown = L->was_shown;
+    tr->app = L->app;
+    tr->seen_z = L->seen_zz > MVT_R(0.0) ? L->seen_z : cand->x[2]; /* or until two views place them, */
+    tr->seen_zz = L->seen_zz > MVT_R(0.0) ? L->seen_zz : cand->P[8]; /* the candidate's */
+    tr->exist_lo = L->dormant || cand->lo > L->exist_lo ? cand->lo : L->exist_lo;
+}
+
+/* How likely candidate cand is label L's person: L's chance of being a person there (its existence)
+ * times the candidate's density under L's widened estimate; -1 where the candidate is neither within
+ * the 3-dof gate of both covariances nor closer than a body's width horizontally (two bodies cannot
+ * overlap, and a track that lost its person is often more sure of its place than it should be). */
+static mvt_real heir_score(const mvt_tracker_t *self, const mvt_body_label_t *L, const mvt_body_cand_t *cand)
+{
+    mvt_real det;
+    const mvt_real d2 = mvt_trk_mahalanobis3(L->x, L->P, cand->x, cand->P, &det);
+    const mvt_real sep = MVT_R(2.0) * self->cfg.body_halfwidth_m;
+    if (!(d2 >= MVT_R(0.0)) || !(det > MVT_R(0.0)) ||
+        (!(d2 < MVT_TRK_GATE3) && !(dist2_xy(L->x, cand->x) < sep * sep))) {
+        return MVT_R(-1.0);
+    }
+    return mvt_body_prob(L->exist_lo) * MVT_EXP(MVT_R(-0.5) * d2) / MVT_SQRT(det);
+}
+
+/* The track that candidate cand continues: one whose existence has fallen under one half (it keeps
+ * its label while its existence lasts), or a dormant one (mvt_body_prune.c), that heir_score allows:
+ * the candidate is that person found again, not a new one. The likeliest, or -1. */
 static int heir_of(const mvt_tracker_t *self, const mvt_body_cand_t *cand)
 {
     int best = -1;
@@ -230,29 +295,10 @@ static int heir_of(const mvt_tracker_t *self, const mvt_body_cand_t *cand)
         if (tr->id == 0 || (tr->exist_lo > MVT_R(0.0) && !tr->dormant)) {
             continue;
         }
-        mvt_real P[9] = {tr->s.P[0], tr->s.P[1], tr->s.P[2], tr->s.P[6], tr->s.P[7],
-                         tr->s.P[8], tr->s.P[12], tr->s.P[13], tr->s.P[14]};
-        {
-            /* since no camera placed the head (hidden, asleep), nobody saw where the person walked:
-             * walking pace's reach over that time (asleep: at least half a second's, the time it
-             * takes to fall asleep) */
-            mvt_real since = mvt_us_to_s(self->last_utime_us - tr->last_update_us);
-            since = since > MVT_R(0.5) || !tr->dormant ? since : MVT_R(0.5);
-            const mvt_real reach = self->cfg.init_vel_std_ms * since;
-            P[0] += reach * reach;
-            P[4] += reach * reach;
-        }
-        mvt_real det;
-        const mvt_real d2 = mvt_trk_mahalanobis3(tr->s.x, P, cand->x, cand->P, &det);
-        const mvt_real sep = MVT_R(2.0) * self->cfg.body_halfwidth_m;
-        if (!(d2 >= MVT_R(0.0)) || !(det > MVT_R(0.0)) ||
-            (!(d2 < MVT_TRK_GATE3) && !(dist2_xy(tr->s.x, cand->x) < sep * sep))) {
-            continue; /* neither within the gate nor where its body stands (two bodies cannot overlap) */
-        }
-        /* the likeliest: the track's chance of being a person there (its existence) times the
-         * candidate's density under it */
-        const mvt_real score = mvt_body_prob(tr->exist_lo) * MVT_EXP(MVT_R(-0.5) * d2) / MVT_SQRT(det);
-        if (best < 0 || score > best_score) {
+        mvt_body_label_t L;
+        label_of(self, tr, &L);
+        const mvt_real score = heir_score(self, &L, cand);
+        if (score >= MVT_R(0.0) && (best < 0 || score > best_score)) {
             best = t;
             best_score = score;
         }
@@ -260,10 +306,82 @@ static int heir_of(const mvt_tracker_t *self, const mvt_body_cand_t *cand)
     return best;
 }
 
+/* This frame's births (slots born, their candidates ws->born_cand) and the labels of the tracks that
+ * lost their person (existence under one half, or asleep: ws->heirs, captured before the births),
+ * paired all at once: the assignment that pairs as many births with labels as heir_score allows,
+ * and of those pairings the one maximising the product of the scores. A birth paired with a label is
+ * that person found again (the sleeper's slot is freed); one paired with none is a new person. One
+ * by one (each candidate taking its likeliest sleeper, best candidate first) two people found again
+ * in one frame, after an outage, could take each other's labels and leave a third with none. */
+static void label_births(mvt_tracker_t *self, const int16_t born[], int n_born)
+{
+    mvt_body_ws_t *ws = &self->body;
+    const int ns = ws->num_heirs, nc = ns + n_born;
+    int r2c[MVT_MAX_TARGETS];
+    for (int i = 0; i < n_born; i++) {
+        r2c[i] = -1;
+    }
+    if (n_born > 0 && ns > 0) {
+        uint8_t owned[MVT_MAX_TARGETS]; /* a label whose slot a birth took is that birth's */
+        memset(owned, 0, sizeof(owned));
+        for (int i = 0; i < n_born; i++) {
+            if (ws->born_own[i] >= 0) {
+                owned[ws->born_own[i]] = 1;
+            }
+        }
+        mvt_real *cost = self->cl_cost;
+        for (int i = 0; i < n_born; i++) {
+            const mvt_body_cand_t *cand = &ws->cand[ws->born_cand[i]];
+            for (int j = 0; j < nc; j++) {
+                cost[i * nc + j] = MVT_R(-1.0);
+            }
+            cost[i * nc + ns + i] = MVT_R(2000.0); /* a new person: dearer than any pairing */
+            for (int j = 0; j < ns; j++) {
+                const mvt_real sc = heir_score(self, &ws->heirs[j], cand);
+                if (sc > MVT_R(0.0) && (ws->born_own[i] < 0 ? !owned[j] : ws->born_own[i] == j)) {
+                    const mvt_real c = MVT_R(1000.0) - MVT_LOG(sc);
+                    cost[i * nc + j] = c < MVT_R(0.0) ? MVT_R(0.0) : (c > MVT_R(1999.0) ? MVT_R(1999.0) : c);
+                }
+            }
+        }
+        if (mvt_assoc_solve(cost, n_born, nc, nc, r2c, &self->assoc_ws) != MVT_OK) {
+            for (int i = 0; i < n_born; i++) {
+                r2c[i] = -1;
+            }
+        }
+    }
+    for (int i = 0; i < n_born; i++) {
+        mvt_track_t *tr = &self->tracks[born[i]];
+        const mvt_body_cand_t *cand = &ws->cand[ws->born_cand[i]];
+        const int j = r2c[i] >= 0 && r2c[i] < ns ? r2c[i] : (ws->born_own[i] >= 0 ? ws->born_own[i] : -1);
+        if (j >= 0) {
+            give_label(tr, &ws->heirs[j], cand);
+            if (ws->heir_slot[j] != born[i]) {
+                memset(&self->tracks[ws->heir_slot[j]], 0, sizeof(self->tracks[0])); /* moved */
+            }
+            self->counters.reacquired++;
+        } else {
+            tr->id = self->next_id;
+            self->next_id = self->next_id < INT32_MAX ? self->next_id + 1 : 1;
+            tr->status = MVT_TRACK_TENTATIVE;
+            tr->seen_z = cand->x[2]; /* the person's height until two views place them */
+            tr->seen_zz = cand->P[8];
+            mvt_trk_app_reset(&tr->app);
+            self->counters.births++;
+        }
+        for (int k = 0; k < self->num_cameras; k++) {
+            if (cand->det[k] >= 0 && self->chroma_ok[k][cand->det[k]]) {
+                mvt_trk_app_update(&tr->app, self->chroma[k][cand->det[k]]);
+            }
+        }
+    }
+}
+
 void mvt_body_birth(mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order, mvt_real dt)
 {
     mvt_body_ws_t *ws = &self->body;
     ws->num_cand = 0;
+    ws->num_heirs = 0;
     int16_t seed_cam[MVT_MAX_BIRTH_CANDIDATES];
     for (int oi = 0; oi < n_order; oi++) {
         const int k = order[oi];
@@ -287,6 +405,13 @@ void mvt_body_birth(mvt_tracker_t *self, const mvt_frame_t *frame, const int ord
     memset(done, 0, sizeof(done));
     int16_t born[MVT_MAX_TARGETS];
     int n_born = 0;
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) { /* the labels that lost their person */
+        const mvt_track_t *tr = &self->tracks[t];
+        if (tr->id != 0 && (!(tr->exist_lo > MVT_R(0.0)) || tr->dormant)) {
+            label_of(self, tr, &ws->heirs[ws->num_heirs]);
+            ws->heir_slot[ws->num_heirs++] = (int16_t)t;
+        }
+    }
     const mvt_real lo_min = mvt_body_logit(self->cfg.exist_delete);
     for (;;) {
         int best = -1;
@@ -303,55 +428,38 @@ void mvt_body_birth(mvt_tracker_t *self, const mvt_frame_t *frame, const int ord
         if (!admissible(self, frame, cand, seed_cam[best], taken, born, n_born)) {
             continue;
         }
-        const int heir = heir_of(self, cand);
-        int slot = heir;
+        /* a free slot; with none left, the likeliest sleeper's, which then can be no one else's */
+        int slot = -1;
         for (int t = 0; t < MVT_MAX_TARGETS && slot < 0; t++) {
             slot = self->tracks[t].id == 0 ? t : -1;
+        }
+        int own = -1;
+        if (slot < 0) {
+            const int heir = heir_of(self, cand);
+            for (int j = 0; j < ws->num_heirs && heir >= 0; j++) {
+                own = ws->heir_slot[j] == heir ? j : own;
+            }
+            slot = own >= 0 ? heir : -1;
         }
         if (slot < 0) {
             self->counters.births_refused_full++;
             break;
         }
         mvt_track_t *tr = &self->tracks[slot];
-        if (heir >= 0) {
-            /* the same person: label, status and colour stay, the estimate starts again */
-            const mvt_track_t old = *tr;
-            memset(tr, 0, sizeof(*tr));
-            mvt_trk_start(self, tr, cand->x, cand->P, frame->utime_us);
-            tr->id = old.id;
-            tr->status = old.was_shown ? MVT_TRACK_CONFIRMED : old.status; /* shown before */
-            tr->was_shown = old.was_shown;
-            tr->app = old.app;
-            tr->seen_z = old.seen_z;
-            tr->seen_zz = old.seen_zz;
-            tr->exist_lo = old.dormant || cand->lo > old.exist_lo ? cand->lo : old.exist_lo;
-            self->counters.reacquired++;
-        } else {
-            memset(tr, 0, sizeof(*tr));
-            mvt_trk_start(self, tr, cand->x, cand->P, frame->utime_us);
-            tr->id = self->next_id;
-            self->next_id = self->next_id < INT32_MAX ? self->next_id + 1 : 1;
-            tr->status = MVT_TRACK_TENTATIVE;
-            tr->exist_lo = cand->lo;
-            mvt_trk_app_reset(&tr->app);
-            self->counters.births++;
-        }
-        /* the person's height until two views place them: the candidate's, or the one the label
-         * carried */
-        if (!(tr->seen_zz > MVT_R(0.0))) {
-            tr->seen_z = cand->x[2];
-            tr->seen_zz = cand->P[8];
-        }
+        memset(tr, 0, sizeof(*tr));
+        mvt_trk_start(self, tr, cand->x, cand->P, frame->utime_us);
+        tr->id = -1; /* taken; its label is given below */
+        tr->exist_lo = cand->lo;
         tr->last_update_us = frame->utime_us;
         for (int j = 0; j < self->num_cameras; j++) {
             if (cand->det[j] >= 0) {
                 taken[j][cand->det[j]] = 1;
                 tr->cameras_used |= 1u << j;
-                if (self->chroma_ok[j][cand->det[j]]) {
-                    mvt_trk_app_update(&tr->app, self->chroma[j][cand->det[j]]);
-                }
             }
         }
+        ws->born_cand[n_born] = (int16_t)best;
+        ws->born_own[n_born] = (int16_t)own;
         born[n_born++] = (int16_t)slot;
     }
+    label_births(self, born, n_born);
 }

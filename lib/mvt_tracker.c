@@ -56,7 +56,7 @@ void mvt_tracker_config_default(mvt_tracker_config_t *c)
     c->contra_max_s = MVT_R(0.5);
     c->p_detect = MVT_R(0.9);
     c->recover_s = MVT_R(3.0);
-    c->lifecycle = MVT_LIFECYCLE_RULES;
+    c->lifecycle = MVT_LIFECYCLE_BODY;
     c->head_height_m = MVT_R(1.70);
     c->head_height_sd_m = MVT_R(0.15);
     c->foot_sd_m = MVT_R(0.12);

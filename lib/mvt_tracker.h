@@ -379,6 +379,19 @@ typedef struct mvt_body_cand {
     int16_t det[MVT_MAX_CAMERAS];       /* the detection of each camera it explains, or -1 */
 } mvt_body_cand_t;
 
+/* A track's label and what was known of its person when a candidate took it (mvt_body_birth.c). */
+typedef struct mvt_body_label {
+    int32_t id;
+    int32_t status;
+    int32_t was_shown;
+    int32_t dormant;
+    mvt_app_t app;
+    mvt_real seen_z, seen_zz;
+    mvt_real exist_lo;
+    mvt_real x[3];     /* the estimate it carried, and its covariance widened by walking pace's reach */
+    mvt_real P[9];
+} mvt_body_label_t;
+
 typedef struct mvt_body_ws {
     mvt_real sil[MVT_MAX_CAMERAS][MVT_MAX_TARGETS][4]; /* each track's predicted silhouette box in
                                                           each camera (u0 v0 u1 v1, raw px); u1 < u0:
@@ -404,6 +417,12 @@ typedef struct mvt_body_ws {
                                                               blob is, or -1 */
     mvt_body_cand_t cand[MVT_MAX_BIRTH_CANDIDATES];
     int num_cand;
+    mvt_body_label_t heirs[MVT_MAX_TARGETS]; /* this frame, before its births: the labels of the tracks
+                                                that lost their person, with what they knew */
+    int16_t heir_slot[MVT_MAX_TARGETS];      /* ... and the slot of each */
+    int num_heirs;
+    int16_t born_cand[MVT_MAX_TARGETS];      /* this frame's births: each one's candidate, */
+    int16_t born_own[MVT_MAX_TARGETS];       /* and the label whose slot it took, or -1 */
     mvt_real clutter_now[MVT_MAX_CAMERAS]; /* this frame: each camera's blobs beyond the tracked
                                               heads it may show (a lower bound of its clutter) */
 } mvt_body_ws_t;

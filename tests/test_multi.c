@@ -1,5 +1,8 @@
 /* Unit tests of the multi-target tracker: identities through crossings, false-alarm floods,
- * capacity, identities never reused, detection selection. */
+ * capacity, identities never reused, detection selection. They were written for the rules
+ * lifecycle (--lifecycle rules, docs/tracking.md) and run with it; the scenes that ask only what
+ * any tracker should do (no rule's timer or counter) run again with the body model, the default
+ * (the _body tests at the end). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -18,12 +21,15 @@ static mvt_frame_t g_frame;
 static mvt_output_t g_out;
 static mvt_camera_t g_cams[5];
 static mvt_detection_t g_flood[512];
+/* The lifecycle the tests below run with (init, and the one-camera-reach test's own). */
+static mvt_lifecycle_t g_lifecycle = MVT_LIFECYCLE_RULES;
 
 static void init(void)
 {
     assert_int_equal(test_room_cameras(g_cams, 1), 0);
     mvt_tracker_config_t cfg;
     mvt_tracker_config_default(&cfg);
+    cfg.lifecycle = g_lifecycle;
     cfg.volume_min[0] = 0; cfg.volume_min[1] = 0; cfg.volume_min[2] = 0;
     cfg.volume_max[0] = 6; cfg.volume_max[1] = 5; cfg.volume_max[2] = 2.5f;
     assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, g_cams, 5), MVT_OK);
@@ -1555,6 +1561,7 @@ static void test_mvt_tracker_step_person_where_one_camera_reaches_kept(void **st
     g_two[1] = g_cams[4];
     mvt_tracker_config_t cfg;
     mvt_tracker_config_default(&cfg);
+    cfg.lifecycle = g_lifecycle;
     cfg.volume_min[0] = 0; cfg.volume_min[1] = 0; cfg.volume_min[2] = 0;
     cfg.volume_max[0] = 6; cfg.volume_max[1] = 5; cfg.volume_max[2] = 2.5f;
     assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, g_two, 2), MVT_OK);
@@ -1632,6 +1639,71 @@ static void test_mvt_tracker_select_under_capacity_keeps_all_in_order(void **sta
     }
 }
 
+
+/* The scenes above that ask only what any tracker should do, with the body model. */
+static void test_mvt_tracker_step_two_people_crossing_keep_identities_body(void **state)
+{
+    g_lifecycle = MVT_LIFECYCLE_BODY;
+    test_mvt_tracker_step_two_people_crossing_keep_identities(state);
+    g_lifecycle = MVT_LIFECYCLE_RULES;
+}
+
+static void test_mvt_tracker_step_coasting_track_does_not_take_passer_by_body(void **state)
+{
+    g_lifecycle = MVT_LIFECYCLE_BODY;
+    test_mvt_tracker_step_coasting_track_does_not_take_passer_by(state);
+    g_lifecycle = MVT_LIFECYCLE_RULES;
+}
+
+static void test_mvt_tracker_step_lost_tracks_reacquired_by_height_body(void **state)
+{
+    g_lifecycle = MVT_LIFECYCLE_BODY;
+    test_mvt_tracker_step_lost_tracks_reacquired_by_height(state);
+    g_lifecycle = MVT_LIFECYCLE_RULES;
+}
+
+static void test_mvt_tracker_step_close_pair_both_kept_body(void **state)
+{
+    g_lifecycle = MVT_LIFECYCLE_BODY;
+    test_mvt_tracker_step_close_pair_both_kept(state);
+    g_lifecycle = MVT_LIFECYCLE_RULES;
+}
+
+static void test_mvt_tracker_step_close_pair_merged_blobs_both_kept_body(void **state)
+{
+    g_lifecycle = MVT_LIFECYCLE_BODY;
+    test_mvt_tracker_step_close_pair_merged_blobs_both_kept(state);
+    g_lifecycle = MVT_LIFECYCLE_RULES;
+}
+
+static void test_mvt_tracker_step_false_alarm_flood_confirmed_tracks_survive_body(void **state)
+{
+    g_lifecycle = MVT_LIFECYCLE_BODY;
+    test_mvt_tracker_step_false_alarm_flood_confirmed_tracks_survive(state);
+    g_lifecycle = MVT_LIFECYCLE_RULES;
+}
+
+static void test_mvt_tracker_step_more_people_than_capacity_births_refused_counted_body(void **state)
+{
+    g_lifecycle = MVT_LIFECYCLE_BODY;
+    test_mvt_tracker_step_more_people_than_capacity_births_refused_counted(state);
+    g_lifecycle = MVT_LIFECYCLE_RULES;
+}
+
+static void test_mvt_tracker_step_person_returns_new_identity_body(void **state)
+{
+    g_lifecycle = MVT_LIFECYCLE_BODY;
+    test_mvt_tracker_step_person_returns_new_identity(state);
+    g_lifecycle = MVT_LIFECYCLE_RULES;
+}
+
+static void test_mvt_tracker_step_queue_hidden_kept_while_box_needs_them_body(void **state)
+{
+    g_lifecycle = MVT_LIFECYCLE_BODY;
+    test_mvt_tracker_step_queue_hidden_kept_while_box_needs_them(state);
+    g_lifecycle = MVT_LIFECYCLE_RULES;
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1662,6 +1734,15 @@ int main(void)
         cmocka_unit_test(test_mvt_tracker_step_head_standing_out_of_merged_blob_measured),
         cmocka_unit_test(test_mvt_tracker_step_camera_that_cannot_see_does_not_update),
         cmocka_unit_test(test_mvt_tracker_step_person_where_one_camera_reaches_kept),
+        cmocka_unit_test(test_mvt_tracker_step_two_people_crossing_keep_identities_body),
+        cmocka_unit_test(test_mvt_tracker_step_coasting_track_does_not_take_passer_by_body),
+        cmocka_unit_test(test_mvt_tracker_step_lost_tracks_reacquired_by_height_body),
+        cmocka_unit_test(test_mvt_tracker_step_close_pair_both_kept_body),
+        cmocka_unit_test(test_mvt_tracker_step_close_pair_merged_blobs_both_kept_body),
+        cmocka_unit_test(test_mvt_tracker_step_false_alarm_flood_confirmed_tracks_survive_body),
+        cmocka_unit_test(test_mvt_tracker_step_more_people_than_capacity_births_refused_counted_body),
+        cmocka_unit_test(test_mvt_tracker_step_person_returns_new_identity_body),
+        cmocka_unit_test(test_mvt_tracker_step_queue_hidden_kept_while_box_needs_them_body),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -35,11 +35,15 @@ static void frame_of(const mvt_camera_t *cams, int n, const mvt_real x[3], int64
     }
 }
 
+/* The lifecycle init_tracker gives (the default, or the rules where a test pins their timers). */
+static mvt_lifecycle_t g_lifecycle = MVT_LIFECYCLE_BODY;
+
 static void init_tracker(mvt_camera_t cams[5], mvt_filter_t f, mvt_pkf_lin_t lin)
 {
     assert_int_equal(test_room_cameras(cams, 1), 0);
     mvt_tracker_config_t cfg;
     mvt_tracker_config_default(&cfg);
+    cfg.lifecycle = g_lifecycle;
     cfg.filter = f;
     cfg.lin = lin;
     cfg.volume_min[0] = 0; cfg.volume_min[1] = 0; cfg.volume_min[2] = 0;
@@ -302,11 +306,14 @@ static void test_mvt_tracker_step_straight_walk_kf_tracked(void **state)
     run_straight_walk(MVT_FILTER_TRIANGULATE, MVT_PKF_JACOBIAN, 0.03);
 }
 
+/* The rules lifecycle's coasting timer and identity recovery (--lifecycle rules). */
 static void test_mvt_tracker_step_unseen_track_coasts_then_dies(void **state)
 {
     (void)state;
     mvt_camera_t cams[5];
+    g_lifecycle = MVT_LIFECYCLE_RULES;
     init_tracker(cams, MVT_FILTER_PROJECTIVE, MVT_PKF_JACOBIAN);
+    g_lifecycle = MVT_LIFECYCLE_BODY;
     test_rng_t rng = {1};
     const mvt_real x[3] = {2, 2, 1.7f};
     int64_t t = 0;
@@ -360,6 +367,7 @@ static void test_mvt_tracker_resume_continues_and_refuses_bad_state(void **state
 {
     (void)state;
     mvt_camera_t cams[5];
+    g_lifecycle = MVT_LIFECYCLE_RULES; /* its recovery records and exit timer */
     init_tracker(cams, MVT_FILTER_PROJECTIVE, MVT_PKF_JACOBIAN);
     test_rng_t rng = {42}, rng_at_save;
     int64_t t = 1000000;
@@ -474,6 +482,7 @@ static void test_mvt_tracker_resume_continues_and_refuses_bad_state(void **state
     int found = 0;
     for (int i = 0; i < g_out.num_tracks; i++) found += g_out.tracks[i].id == 5000;
     assert_int_equal(found, 1);
+    g_lifecycle = MVT_LIFECYCLE_BODY;
 }
 
 static void test_mvt_tracker_step_hostile_detections_counted_not_fatal(void **state)

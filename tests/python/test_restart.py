@@ -47,8 +47,8 @@ def ids_of(path: Path) -> dict[int, list]:
 
 def test_state_offline_halves_continue_bit_for_bit(scene, daemon_path):
     """Cut at frame 150 with no gap: the second half restored from the first's checkpoint gives the
-    whole run's tracks, bit for bit, under the same identities (a birth after the cut would take an
-    identity above the lease: none happens here)."""
+    whole run's tracks, bit for bit, under the same identities; a track born after the cut takes an
+    identity above every one leased before it, the same one all its life."""
     d, rp, log = scene
     run(daemon_path, rp, log, d / "whole.lcm")
     a, b = d / "a.lcm", d / "b.lcm"
@@ -59,12 +59,19 @@ def test_state_offline_halves_continue_bit_for_bit(scene, daemon_path):
     assert state.exists() and Path(f"{state}.ids").exists()
     r2 = run(daemon_path, rp, b, d / "b_out.lcm", "--state", str(state))
     assert "restored 2 tracks" in r2.stderr, r2.stderr
-    whole, second = ids_of(d / "whole.lcm"), ids_of(d / "b_out.lcm")
+    whole, first, second = ids_of(d / "whole.lcm"), ids_of(d / "a_out.lcm"), ids_of(d / "b_out.lcm")
     assert len(second) >= 140
+    before = {t.id for ts in first.values() for t in ts}
+    renamed = {}
     for u, tracks in second.items():
         ref = whole[u]
-        assert [(t.id, t.status, tuple(t.position), tuple(t.position_covariance)) for t in tracks] == \
-               [(t.id, t.status, tuple(t.position), tuple(t.position_covariance)) for t in ref]
+        assert [(t.status, tuple(t.position), tuple(t.position_covariance)) for t in tracks] == \
+               [(t.status, tuple(t.position), tuple(t.position_covariance)) for t in ref]
+        for t, r in zip(tracks, ref):
+            if r.id in before:
+                assert t.id == r.id
+            else:
+                assert t.id > max(before) and renamed.setdefault(r.id, t.id) == t.id
 
 
 def test_state_offline_gap_keeps_identities_stale_does_not(scene, daemon_path):
@@ -176,9 +183,11 @@ def test_state_live_restart_keeps_identities_never_reuses(tmp_path, daemon_path,
 def test_state_outage_identities_over_30_scenes(tmp_path, daemon_path):
     """5 people walking a 6 x 5 m room, the log cut at 6 s and 1.5 s of it removed (an outage the
     restarted daemon did not see), 30 seeds (tools/mvtrack restart --offline 30 --down 1.5).
-    Measured: 123 of 144 people keep their identity and 6 identities go to another person (2 of
-    them the scenes' own switches, as without a cut); before the re-acquisition by height
-    (mvt_trk_reacquire) 104 and 21. The bar sits between the two."""
+    Measured with the body model (the default): 137 of 145 people keep their identity and 10
+    identities go to another person; with the persons found again paired one by one and by the
+    state's height (which the motion model's vertical noise forgets over the outage) 128 and 17.
+    With the rules (--lifecycle rules) 123 of 144 and 6; before their re-acquisition by height
+    104 and 21."""
     kept = present = reused = 0
     for seed in range(1, 31):
         r = restart.offline(seed, 1.5, 6.0, 14.0, tmp_path)
