@@ -71,13 +71,13 @@ static void usage(FILE *f)
             "                      (mvtrack.particles_t; default 0 = none)\n",
             MVTD_DEFAULT_URL, MVT_MAX_PARTICLES, MVT_MAX_PARTICLES);
     fprintf(f,
-            "  --lifecycle rules|body\n"
-            "                      pkf modes: how tracks are born, kept and ended. rules (default):\n"
-            "                      timers and rules; body: one model of a person, a head over a\n"
-            "                      body with its silhouette in every view, blobs explained as heads,\n"
-            "                      fragments or clutter, births from any number of views with a\n"
-            "                      prior on head height and the feet where visible, and a\n"
-            "                      probability of existence that confirms and deletes\n"
+            "  --lifecycle body|rules\n"
+            "                      pkf modes: how tracks are born, kept and ended. body (default):\n"
+            "                      one model of a person, a head over a body with its silhouette in\n"
+            "                      every view, blobs explained as heads, fragments or clutter,\n"
+            "                      births from any number of views with a prior on head height and\n"
+            "                      the feet where visible, and a probability of existence that\n"
+            "                      confirms and deletes; rules: timers and rules\n"
             "  --gate chi2|paper   association gate: innovation chi-square (default) or the paper's\n"
             "                      projected ellipsoid (Eq. 22-26)\n"
             "  --gate-chi2 X       chi-square threshold, 2 dof (default 13.8)\n"
