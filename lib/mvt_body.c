@@ -373,17 +373,26 @@ void mvt_body_step(mvt_tracker_t *self, const mvt_frame_t *frame, const int orde
         }
     }
     mvt_body_existence(self, dt);
-    if (dt * self->cfg.init_vel_std_ms > MVT_R(2.0) * self->cfg.body_halfwidth_m) {
-        /* nobody watched for longer than a person takes to walk a body's width (the daemon was
-         * down, every camera dropped): where each person is now is the views' to say, and who is
-         * who the heights' and the reach's (mvt_body_birth.c: the persons found again, paired all
-         * at once) */
+    const mvt_real typical = self->frame_dt_s;
+    if (dt * self->cfg.init_vel_std_ms > MVT_R(2.0) * self->cfg.body_halfwidth_m && dt > MVT_BODY_GAP_FRAMES * typical) {
+        /* nobody watched for longer than a person takes to walk a body's width, and for several of
+         * the rig's frame intervals (the daemon was down, every camera dropped): where each person
+         * is now is the views' to say, and who is who the heights' and the reach's
+         * (mvt_body_birth.c: the persons found again, paired all at once) */
         for (int t = 0; t < MVT_MAX_TARGETS; t++) {
             mvt_track_t *tr = &self->tracks[t];
             if (tr->id != 0 && !tr->dormant && tr->was_shown) {
                 tr->dormant = 1;
                 tr->status = MVT_TRACK_TENTATIVE;
             }
+        }
+    }
+    if (dt > MVT_R(0.0)) {
+        /* the typical interval: follows a shorter one at once, a longer one slowly, a gap not */
+        if (!(typical > MVT_R(0.0)) || dt < typical) {
+            self->frame_dt_s = dt;
+        } else if (dt <= MVT_BODY_GAP_FRAMES * typical) {
+            self->frame_dt_s = typical + MVT_R(0.05) * (dt - typical);
         }
     }
     for (int oi = 0; oi < n_order; oi++) {

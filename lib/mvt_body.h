@@ -89,6 +89,9 @@
 /* A merged blob's edge that one body's silhouette alone puts there measures that edge of the body
  * when it lies within this many squared standard deviations of it (chi-square, 1 dof, 99.7 %). */
 #define MVT_BODY_EDGE_GATE MVT_R(9.0)
+/* A time without frames longer than this many of the rig's typical intervals (and than a person
+ * takes to walk a body's width) is an outage: nobody watched (mvt_body_step). */
+#define MVT_BODY_GAP_FRAMES MVT_R(4.0)
 /* A fragment's top lies at least this share of the silhouette's height below the head's top (a
  * blob at the head's own height beside it is not the body's). */
 #define MVT_BODY_FRAGMENT_BELOW MVT_R(0.08)

@@ -504,6 +504,8 @@ typedef struct mvt_tracker {
                                              (mvt_body_update.c); 0: not yet */
     mvt_real frag_n[MVT_MAX_CAMERAS];     /* ... and the fragments it shows per body likely present
                                              per frame, learnt (mvt_body.c); 0: not yet */
+    mvt_real frame_dt_s;                  /* MVT_LIFECYCLE_BODY: the typical time between frames, s
+                                             (mvt_body.c); 0: not yet. Not persisted */
     mvt_body_ws_t body;         /* MVT_LIFECYCLE_BODY's workspace */
 } mvt_tracker_t;
 
