@@ -206,6 +206,37 @@ def test_daemon_crowd_acceptance_scene_meets_the_bar(tmp_path, daemon_path):
 
 
 @pytest.mark.daemon
+def test_daemon_crowd_at_two_frames_a_second(tmp_path, daemon_path):
+    """The crowd scene (smart room, seed 1, 30 s) seen at 25/12 fps: every 12th frame set of the
+    25 fps log, the rig declaring that rate. Half a second between frames is the rig's pace, not an
+    outage: measured MOTA 0.928, 1 switch (0.661 and 11 switches while every such gap put the
+    tracks to sleep)."""
+    import lcm
+    rig = smartroom()
+    scene, frames = build_multi("crowd", rig, 1, seconds=30.0)
+    full = tmp_path / "crowd_25fps.lcm"
+    w = LogWriter(str(full))
+    write_multi(w, scene, frames, progress=False)
+    w.close()
+    slow = tmp_path / "crowd_2fps.lcm"
+    src, dst = lcm.EventLog(str(full), "r"), lcm.EventLog(str(slow), "w", overwrite=True)
+    for ev in src:
+        if int(round((ev.timestamp - T0_UTIME) / 40000.0)) % 12 == 0:
+            dst.write_event(ev.timestamp, ev.channel, ev.data)
+    dst.close()
+    rig.frame_rate = 25.0 / 12.0
+    rp = tmp_path / "rig_2fps.yaml"
+    rig.write(rp)
+    out = tmp_path / "tracks_2fps.lcm"
+    r = subprocess.run([str(daemon_path), "--rig", str(rp), "--in", f"file://{slow}?speed=0", "--out",
+                        f"file://{out}?mode=w"], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    res = clear_mot(pair_frames(read_log(str(slow), lambda c: c == "GROUND_TRUTH"),
+                                read_log(str(out), lambda c: c == "TRACKS"), rig.frame_rate))
+    assert res.mota > 0.9 and res.id_switches <= 2, res
+
+
+@pytest.mark.daemon
 @pytest.mark.parametrize("n_cameras,seed", [(4, 11), (6, 12), (8, 13)])
 def test_daemon_multi_person_on_rigs_built_differently(tmp_path, daemon_path, n_cameras, seed):
     rig = random_rig(np.random.default_rng(seed), n_cameras)
