@@ -186,8 +186,7 @@ def test_state_outage_identities_over_30_scenes(tmp_path, daemon_path):
     Measured with the body model (the default): 137 of 145 people keep their identity and 10
     identities go to another person; with the persons found again paired one by one and by the
     state's height (which the motion model's vertical noise forgets over the outage) 128 and 17.
-    With the rules (--lifecycle rules) 123 of 144 and 6; before their re-acquisition by height
-    104 and 21."""
+    With the rules (--lifecycle rules) 134 of 144 and 9."""
     kept = present = reused = 0
     for seed in range(1, 31):
         r = restart.offline(seed, 1.5, 6.0, 14.0, tmp_path)
