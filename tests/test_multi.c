@@ -1641,68 +1641,22 @@ static void test_mvt_tracker_select_under_capacity_keeps_all_in_order(void **sta
 
 
 /* The scenes above that ask only what any tracker should do, with the body model. */
-static void test_mvt_tracker_step_two_people_crossing_keep_identities_body(void **state)
-{
-    g_lifecycle = MVT_LIFECYCLE_BODY;
-    test_mvt_tracker_step_two_people_crossing_keep_identities(state);
-    g_lifecycle = MVT_LIFECYCLE_RULES;
-}
-
-static void test_mvt_tracker_step_coasting_track_does_not_take_passer_by_body(void **state)
-{
-    g_lifecycle = MVT_LIFECYCLE_BODY;
-    test_mvt_tracker_step_coasting_track_does_not_take_passer_by(state);
-    g_lifecycle = MVT_LIFECYCLE_RULES;
-}
-
-static void test_mvt_tracker_step_lost_tracks_reacquired_by_height_body(void **state)
-{
-    g_lifecycle = MVT_LIFECYCLE_BODY;
-    test_mvt_tracker_step_lost_tracks_reacquired_by_height(state);
-    g_lifecycle = MVT_LIFECYCLE_RULES;
-}
-
-static void test_mvt_tracker_step_close_pair_both_kept_body(void **state)
-{
-    g_lifecycle = MVT_LIFECYCLE_BODY;
-    test_mvt_tracker_step_close_pair_both_kept(state);
-    g_lifecycle = MVT_LIFECYCLE_RULES;
-}
-
-static void test_mvt_tracker_step_close_pair_merged_blobs_both_kept_body(void **state)
-{
-    g_lifecycle = MVT_LIFECYCLE_BODY;
-    test_mvt_tracker_step_close_pair_merged_blobs_both_kept(state);
-    g_lifecycle = MVT_LIFECYCLE_RULES;
-}
-
-static void test_mvt_tracker_step_false_alarm_flood_confirmed_tracks_survive_body(void **state)
-{
-    g_lifecycle = MVT_LIFECYCLE_BODY;
-    test_mvt_tracker_step_false_alarm_flood_confirmed_tracks_survive(state);
-    g_lifecycle = MVT_LIFECYCLE_RULES;
-}
-
-static void test_mvt_tracker_step_more_people_than_capacity_births_refused_counted_body(void **state)
-{
-    g_lifecycle = MVT_LIFECYCLE_BODY;
-    test_mvt_tracker_step_more_people_than_capacity_births_refused_counted(state);
-    g_lifecycle = MVT_LIFECYCLE_RULES;
-}
-
-static void test_mvt_tracker_step_person_returns_new_identity_body(void **state)
-{
-    g_lifecycle = MVT_LIFECYCLE_BODY;
-    test_mvt_tracker_step_person_returns_new_identity(state);
-    g_lifecycle = MVT_LIFECYCLE_RULES;
-}
-
-static void test_mvt_tracker_step_queue_hidden_kept_while_box_needs_them_body(void **state)
-{
-    g_lifecycle = MVT_LIFECYCLE_BODY;
-    test_mvt_tracker_step_queue_hidden_kept_while_box_needs_them(state);
-    g_lifecycle = MVT_LIFECYCLE_RULES;
-}
+#define WITH_BODY(test)                       \
+    static void test##_body(void **state)     \
+    {                                         \
+        g_lifecycle = MVT_LIFECYCLE_BODY;     \
+        test(state);                          \
+        g_lifecycle = MVT_LIFECYCLE_RULES;    \
+    }
+WITH_BODY(test_mvt_tracker_step_two_people_crossing_keep_identities)
+WITH_BODY(test_mvt_tracker_step_coasting_track_does_not_take_passer_by)
+WITH_BODY(test_mvt_tracker_step_lost_tracks_reacquired_by_height)
+WITH_BODY(test_mvt_tracker_step_close_pair_both_kept)
+WITH_BODY(test_mvt_tracker_step_close_pair_merged_blobs_both_kept)
+WITH_BODY(test_mvt_tracker_step_false_alarm_flood_confirmed_tracks_survive)
+WITH_BODY(test_mvt_tracker_step_more_people_than_capacity_births_refused_counted)
+WITH_BODY(test_mvt_tracker_step_person_returns_new_identity)
+WITH_BODY(test_mvt_tracker_step_queue_hidden_kept_while_box_needs_them)
 
 int main(void)
 {
