@@ -374,7 +374,9 @@ void mvt_body_step(mvt_tracker_t *self, const mvt_frame_t *frame, const int orde
     }
     mvt_body_existence(self, dt);
     const mvt_real typical = self->frame_dt_s;
-    if (dt * self->cfg.init_vel_std_ms > MVT_R(2.0) * self->cfg.body_halfwidth_m && dt > MVT_BODY_GAP_FRAMES * typical) {
+    const int outage = dt * self->cfg.init_vel_std_ms > MVT_R(2.0) * self->cfg.body_halfwidth_m &&
+                       dt > MVT_BODY_GAP_FRAMES * typical;
+    if (outage) {
         /* nobody watched for longer than a person takes to walk a body's width, and for several of
          * the rig's frame intervals (the daemon was down, every camera dropped): where each person
          * is now is the views' to say, and who is who the heights' and the reach's

@@ -15,7 +15,7 @@
  * One frame (mvt_body_step, in mvt_body.c; no step calls another, each reads what the previous
  * wrote in the workspace mvt_body_ws_t and nothing older):
  *   existence    survival over dt: a person leaves at rate 1 / stay_s, near a side wall at
- *                1 / exit_s more
+ *                1 / exit_s more; after an outage (MVT_BODY_GAP_FRAMES) every shown track sleeps
  *   per observed camera, in capture-time order:
  *     predict     each track's estimate to the camera's capture time (mvt_trk_motion.c)
  *     visibility  mvt_body_vis.c: each track's predicted head and silhouette; the probability that
@@ -28,8 +28,9 @@
  *                 its fragment density beats clutter; a head in another body's blob is hosted;
  *                 a shown head no blob reports is the mask's top in its column; the rest unexplained
  *     update      mvt_body_update.c: a head (a blob's, or the mask's top) updates its track (PKF);
- *                 the existence takes the camera's evidence: detected (against clutter and other
- *                 bodies' fragments), hosted (with the merged box's edges), missed with a fragment
+ *                 a hosted head's column stays in its host's box, whose edges that only its body
+ *                 makes measure it; the existence takes the camera's evidence: detected (against
+ *                 clutter and other bodies' fragments), hosted (with the merged box's edges), missed with a fragment
  *                 of the body in view (no evidence), or missed; the camera's clutter rate,
  *                 detection probability and fragment rate are learnt
  *   one view     mvt_body_update.c: a track one camera alone placed takes its blob's visible feet;
@@ -37,7 +38,8 @@
  *   birth        mvt_body_birth.c: each unexplained blob is the seed of a candidate: its head ray
  *                with the prior on head height, its feet where visible, then every other camera's
  *                unexplained blobs (or their absence where the head would show); a candidate is
- *                born when its odds of a person against clutter allow, best first
+ *                born when its odds of a person against clutter allow, best first; the births and
+ *                the labels of tracks that lost their person are paired all at once
  *   prune        mvt_body_prune.c: deletion by existence, uncertainty and the volume; two bodies
  *                cannot overlap (closer than body_halfwidth_m, the estimates are one person's);
  *                the status from the existence

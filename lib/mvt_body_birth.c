@@ -20,11 +20,14 @@
  * a person seen by one camera alone is born from their first frames.
  * Candidates are born best first while their existence is above exist_delete, each blob used once,
  * never inside a body already there (two bodies cannot overlap: 2 body_halfwidth_m apart at least),
- * and never from a blob that lies in a newborn's silhouette below its head (its fragment). A
- * candidate that could be a tracked person whose existence has fallen under one half (within the
- * gate of both estimates, or closer than a body's width) is that person found again: their track
- * restarts there with its label.
- * Cost O(C D) candidates, each O(C D); memory: the workspace's candidate array.
+ * and never from a blob that lies in a newborn's silhouette below its head (its fragment). Then
+ * the frame's births and the labels of the tracks that lost their person (existence under one
+ * half, or asleep) are paired all at once (label_births): a birth that could be such a person
+ * (within the gate of both estimates, the label's widened by walking pace since it was placed and
+ * holding the person's height, or closer than a body's width) is that person found again, and
+ * takes the label; the others are new people.
+ * Cost O(C D) candidates, each O(C D), and an O(B^2 (B + L)) assignment of B births to L labels;
+ * memory: the workspace's candidate and label arrays.
  */
 #include "mvt_body.h"
 

@@ -374,7 +374,8 @@ static void host_edges(mvt_tracker_t *self, mvt_track_t *tr, const mvt_view_t *v
     }
     if (b[2] < W - MVT_R(1.0) - MVT_BODY_EDGE_PX && sil_t[2] > all[2] + margin && nearer(b[2], sil_t[2], all[2])) {
         /* after the left side's update: its shift of the prediction, and the spread it left */
-        const mvt_real shift = Hu[0] * (tr->s.x[0] - x0[0]) + Hu[1] * (tr->s.x[1] - x0[1]) + Hu[2] * (tr->s.x[2] - x0[2]);
+        const mvt_real shift =
+            Hu[0] * (tr->s.x[0] - x0[0]) + Hu[1] * (tr->s.x[1] - x0[1]) + Hu[2] * (tr->s.x[2] - x0[2]);
         update_edge(self, tr, Hu, b[2] - sil_t[2] - shift, en.r, en.r + hph3(Hu, tr->s.P), en.q, W);
     }
     if (b[3] < Hpx - MVT_R(1.0) - MVT_BODY_EDGE_PX && sil_t[3] > all[3] + MVT_R(2.0) * MVT_SQRT(en.s2v) &&
