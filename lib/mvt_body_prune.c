@@ -3,9 +3,10 @@
  * status, all from the model.
  *
  * A track ends when its existence falls under exist_delete (the cameras say nobody is there, or
- * its person walked out through a wall): one that was shown confirmed first, away from the side walls
- * (where people leave), sleeps (dormant, unseen and unshown) MVT_BODY_DORMANT_S, its label kept for
- * the person found again nearby. It ends too
+ * its person walked out through a wall): one that was shown confirmed first sleeps (dormant, unseen
+ * and unshown) MVT_BODY_DORMANT_S, its label kept for the person found again nearby, unless it is
+ * by a side wall and its velocity carries it out through that wall (its person left; one walking
+ * along the wall sleeps like any other). It ends too
  * when its horizontal position is spread wider than
  * max_pos_std_m (nobody has seen it for long: it is nowhere in particular), or when it leaves the
  * volume widened by volume_margin_m.
@@ -32,6 +33,16 @@ static void end_track(mvt_tracker_t *self, mvt_track_t *tr, uint64_t *reason)
     memset(tr, 0, sizeof(*tr));
 }
 
+/* A track by a side wall whose velocity carries it out through that wall (faster than a tenth of
+ * walking pace): its person left. */
+static int heading_out(const mvt_tracker_config_t *c, const mvt_track_t *tr)
+{
+    const mvt_real m = c->exit_margin_m, v = MVT_R(0.1) * c->init_vel_std_ms;
+    const mvt_real *x = tr->s.x;
+    return (x[0] < c->volume_min[0] + m && x[3] < -v) || (x[0] > c->volume_max[0] - m && x[3] > v) ||
+           (x[1] < c->volume_min[1] + m && x[4] < -v) || (x[1] > c->volume_max[1] - m && x[4] > v);
+}
+
 static int shown(const mvt_track_t *tr)
 {
     return tr->status == MVT_TRACK_CONFIRMED || tr->status == MVT_TRACK_COASTING;
@@ -56,7 +67,7 @@ void mvt_body_prune(mvt_tracker_t *self)
                 end_track(self, tr, &self->counters.deleted_unlikely);
             }
         } else if (!(tr->exist_lo >= lo_delete)) {
-            if (tr->was_shown && !mvt_body_near_side_wall(c, tr->s.x)) {
+            if (tr->was_shown && !heading_out(c, tr)) {
                 tr->dormant = 1; /* the label waits for its person (heir_of, mvt_body_birth.c) */
                 tr->status = MVT_TRACK_TENTATIVE;
                 tr->last_update_us = self->last_utime_us; /* asleep since */
