@@ -266,20 +266,10 @@ static edge_noise_t edge_noise(const mvt_tracker_t *self, int k, int t, int d)
  * whose top the blob reports), < 0 where t's body would stick out of it, 0 where the others fill
  * t's silhouette either way (right behind another: no information). Edges at the picture's border,
  * where the box is cut, say nothing. */
-static mvt_real extent_llr(const mvt_tracker_t *self, const mvt_view_t *view, int k, int t, int d)
+static mvt_real extent_llr(const mvt_camera_t *cam, const mvt_real b[4], const mvt_real sil_t[4], const mvt_real all[4],
+                           const edge_noise_t *e)
 {
-    const mvt_camera_t *cam = &self->cams[k];
-    const mvt_body_ws_t *ws = &self->body;
-    const mvt_real *b = view->det[d].box, *sil_t = ws->sil[k][t];
-    if (!mvt_trk_box_ok(b) || !(sil_t[2] > sil_t[0]) || !(self->pred[t].depth_m > MVT_R(0.0))) {
-        return MVT_R(0.0);
-    }
-    mvt_real all[4];
-    others_in_blob(self, k, t, b, all);
-    if (!(all[2] > all[0])) {
-        return MVT_R(0.0);
-    }
-    const edge_noise_t en = edge_noise(self, k, t, d);
+    const edge_noise_t en = *e;
     const mvt_real W = (mvt_real)cam->width, H = (mvt_real)cam->height;
     mvt_real llr = MVT_R(0.0);
     if (b[0] > MVT_BODY_EDGE_PX && sil_t[0] < all[0]) {
@@ -347,24 +337,15 @@ static int nearer(mvt_real e, mvt_real a, mvt_real b)
  * than theirs) measures that edge of t's silhouette: the sides its column, the bottom its feet (the
  * body's point on the floor nearest the camera), which a merged blob shows when t is the nearest
  * body in it. */
-static void host_edges(mvt_tracker_t *self, mvt_track_t *tr, const mvt_view_t *view, int k, int t, int d)
+static void host_edges(mvt_tracker_t *self, mvt_track_t *tr, int k, const mvt_real b[4], const mvt_real sil_t[4],
+                       const mvt_real all[4], const edge_noise_t *e)
 {
     const mvt_camera_t *cam = &self->cams[k];
-    const mvt_real *b = view->det[d].box;
-    const mvt_real *sil_t = self->body.sil[k][t];
-    if (!mvt_trk_box_ok(b) || !(sil_t[2] > sil_t[0]) || !(self->pred[t].depth_m > MVT_R(0.0))) {
-        return;
-    }
-    mvt_real all[4];
-    others_in_blob(self, k, t, b, all);
-    if (!(all[2] > all[0])) {
-        return;
-    }
+    const edge_noise_t en = *e;
     mvt_pkf_pred_t p; /* raw pixels, as the silhouettes */
     if (mvt_pkf_predict_obs(&tr->s, cam, MVT_PKF_JACOBIAN, &p) != MVT_OK) {
         return;
     }
-    const edge_noise_t en = edge_noise(self, k, t, d);
     const mvt_real W = (mvt_real)cam->width, Hpx = (mvt_real)cam->height;
     const mvt_real *Hu = p.H;
     const mvt_real margin = MVT_R(2.0) * MVT_SQRT(en.s2u);
@@ -387,6 +368,25 @@ static void host_edges(mvt_tracker_t *self, mvt_track_t *tr, const mvt_view_t *v
             update_edge(self, tr, Hv, in.y[1], in.r, in.S[2], en.q, Hpx);
         }
     }
+}
+
+/* Track t hosted by blob d of camera k: the box's evidence for its existence (extent_llr, from the
+ * prediction) is returned, then the edges that are its body's measure it (host_edges). */
+static mvt_real hosted(mvt_tracker_t *self, mvt_track_t *tr, const mvt_view_t *view, int k, int t, int d)
+{
+    const mvt_real *b = view->det[d].box, *sil_t = self->body.sil[k][t];
+    if (!mvt_trk_box_ok(b) || !(sil_t[2] > sil_t[0]) || !(self->pred[t].depth_m > MVT_R(0.0))) {
+        return MVT_R(0.0);
+    }
+    mvt_real all[4];
+    others_in_blob(self, k, t, b, all);
+    if (!(all[2] > all[0])) {
+        return MVT_R(0.0);
+    }
+    const edge_noise_t en = edge_noise(self, k, t, d);
+    const mvt_real llr = extent_llr(&self->cams[k], b, sil_t, all, &en);
+    host_edges(self, tr, k, b, sil_t, all, &en);
+    return llr;
 }
 
 /* Camera k updated track t's head; it placed it unless the motion model judged the head displaced. */
@@ -464,9 +464,8 @@ void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_rea
         }
         if (d < 0) {
             if (ws->host[t] >= 0) {
-                tr->exist_lo += MVT_LOG(MVT_R(1.0) - p * MVT_BODY_P_SHOWN_HIDDEN) + extent_llr(self, view, k, t, ws->host[t]);
                 keep_in_blob(self, tr, k, &view->det[ws->host[t]]);
-                host_edges(self, tr, view, k, t, ws->host[t]);
+                tr->exist_lo += MVT_LOG(MVT_R(1.0) - p * MVT_BODY_P_SHOWN_HIDDEN) + hosted(self, tr, view, k, t, ws->host[t]);
             } else if (ws->frag[t] >= 0) {
                 keep_in_blob(self, tr, k, &view->det[ws->frag[t]]); /* the piece holds the body's column */
             } else {
