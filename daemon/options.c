@@ -409,16 +409,16 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
     cfg.filter = mi == 4 ? MVT_FILTER_TRIANGULATE : MVT_FILTER_PROJECTIVE;
     cfg.gate = gi == 0 ? MVT_GATE_CHI2 : MVT_GATE_PAPER;
     static const mvt_merge_t merge_of[] = {MVT_MERGE_NEITHER, MVT_MERGE_SHARE, MVT_MERGE_OFF, MVT_MERGE_TOP};
-    cfg.merge = merge_of[ri];
+    cfg.rules.merge = merge_of[ri];
     cfg.gate_chi2 = (mvt_real)gate_chi2;
-    cfg.occlusion = oi == 0;
+    cfg.rules.occlusion = oi == 0;
     cfg.lifecycle = li == 1 ? MVT_LIFECYCLE_BODY : MVT_LIFECYCLE_RULES;
     if (exclusion_m < 0.0) { /* measured defaults: docs/particle-filter.md, docs/tracking.md */
         exclusion_m = mi >= 5 ? 0.5 : 0.4;
     }
-    cfg.exclusion_m = (mvt_real)exclusion_m;
+    cfg.rules.exclusion_m = (mvt_real)exclusion_m;
     if (recover_s >= 0.0) {
-        cfg.recover_s = (mvt_real)recover_s;
+        cfg.rules.recover_s = (mvt_real)recover_s;
     }
     if (vi == 1) {
         mvt_imm_config_single(&cfg.motion, q);
@@ -462,8 +462,8 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
         /* the particle filter's blob tracker only proposes births: it keeps the lifecycle its
          * figures were measured with (docs/particle-filter.md); exclusion is the particles' own */
         pcfg.det.lifecycle = MVT_LIFECYCLE_RULES;
-        pcfg.det.occlusion = 0;
-        pcfg.det.exclusion_m = 0;
+        pcfg.det.rules.occlusion = 0;
+        pcfg.det.rules.exclusion_m = 0;
         pcfg.num_particles = (int)particles;
         pcfg.use_colour = mi == 5;
         pcfg.column = bi == 0;

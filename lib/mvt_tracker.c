@@ -19,43 +19,43 @@ void mvt_tracker_config_default(mvt_tracker_config_t *c)
     c->gate = MVT_GATE_CHI2;
     mvt_imm_config_default(&c->motion);
     c->gate_chi2 = MVT_R(13.8);
-    c->paper_gamma = MVT_R(6.0);
+    c->paper.gamma = MVT_R(6.0);
     for (int i = 0; i < 3; i++) {
-        c->paper_var_m2[i] = MVT_R(0.04) * MVT_R(0.04);
+        c->paper.var_m2[i] = MVT_R(0.04) * MVT_R(0.04);
         c->volume_min[i] = MVT_R(-5.0);
         c->volume_max[i] = MVT_R(5.0);
     }
     c->volume_min[2] = MVT_R(0.0);
     c->volume_max[2] = MVT_R(3.0);
-    c->paper_delta = MVT_R(1.0);
-    c->birth_reproj_sigma = MVT_R(4.0);
-    c->birth_min_reproj_px = MVT_R(4.0);
-    c->birth_min_views = 2;
-    c->birth_min_sep_m = MVT_R(0.4);
+    c->paper.delta = MVT_R(1.0);
+    c->rules.birth_reproj_sigma = MVT_R(4.0);
+    c->rules.birth_min_reproj_px = MVT_R(4.0);
+    c->rules.birth_min_views = 2;
+    c->rules.birth_min_sep_m = MVT_R(0.4);
     c->init_vel_std_ms = MVT_R(1.0);
-    c->seen_min_views = 2;
-    c->seen_max_std_m = MVT_R(0.0);
-    c->confirm_hits = 3;
-    c->confirm_window = 5;
-    c->tentative_max_misses = 2;
-    c->coast_max_s = MVT_R(2.0);
+    c->rules.seen_min_views = 2;
+    c->rules.seen_max_std_m = MVT_R(0.0);
+    c->rules.confirm_hits = 3;
+    c->rules.confirm_window = 5;
+    c->rules.tentative_max_misses = 2;
+    c->rules.coast_max_s = MVT_R(2.0);
     c->max_pos_std_m = MVT_R(1.0);
     c->volume_margin_m = MVT_R(0.5);
     c->var_floor_m2 = MVT_R(1e-10);
-    c->merge = MVT_MERGE_NEITHER;
-    c->merge_width_m = MVT_R(0.5);
-    c->merge_ambiguity = MVT_R(4.0);
-    c->dup_dist_m = MVT_R(0.25);
+    c->rules.merge = MVT_MERGE_NEITHER;
+    c->rules.merge_width_m = MVT_R(0.5);
+    c->rules.merge_ambiguity = MVT_R(4.0);
+    c->rules.dup_dist_m = MVT_R(0.25);
     c->exit_margin_m = MVT_R(0.5);
-    c->exit_coast_s = MVT_R(0.3);
-    c->occlusion = 1;
+    c->rules.exit_coast_s = MVT_R(0.3);
+    c->rules.occlusion = 1;
     c->body_halfwidth_m = MVT_R(0.2);
-    c->occluded_max_s = MVT_R(10.0);
-    c->exclusion_m = MVT_R(0.4);
-    c->contra_views = 2;
-    c->contra_max_s = MVT_R(0.5);
+    c->rules.occluded_max_s = MVT_R(10.0);
+    c->rules.exclusion_m = MVT_R(0.4);
+    c->rules.contra_views = 2;
+    c->rules.contra_max_s = MVT_R(0.5);
     c->p_detect = MVT_R(0.9);
-    c->recover_s = MVT_R(3.0);
+    c->rules.recover_s = MVT_R(3.0);
     c->lifecycle = MVT_LIFECYCLE_BODY;
     c->head_height_m = MVT_R(1.70);
     c->head_height_sd_m = MVT_R(0.15);
@@ -84,30 +84,30 @@ static int body_config_ok(const mvt_tracker_config_t *c)
 static int config_ok(const mvt_tracker_config_t *c)
 {
     for (int i = 0; i < 3; i++) {
-        if (!(c->paper_var_m2[i] > MVT_R(0.0)) ||
+        if (!(c->paper.var_m2[i] > MVT_R(0.0)) ||
             !isfinite(c->volume_min[i]) || !isfinite(c->volume_max[i]) || !(c->volume_max[i] > c->volume_min[i])) {
             return 0;
         }
     }
-    return body_config_ok(c) && mvt_imm_config_check(&c->motion) == MVT_OK && c->gate_chi2 > MVT_R(0.0) && c->paper_gamma > MVT_R(0.0) && c->paper_delta > MVT_R(0.0) &&
-           c->birth_reproj_sigma > MVT_R(0.0) && c->birth_min_reproj_px >= MVT_R(0.0) && c->birth_min_views >= 2 &&
-           c->birth_min_sep_m >= MVT_R(0.0) && c->init_vel_std_ms > MVT_R(0.0) && c->confirm_window >= 1 &&
-           c->seen_min_views >= 1 && c->seen_max_std_m >= MVT_R(0.0) && isfinite(c->seen_max_std_m) &&
-           c->confirm_window <= 32 && c->confirm_hits >= 1 && c->confirm_hits <= c->confirm_window &&
-           c->tentative_max_misses >= 1 && c->coast_max_s > MVT_R(0.0) && c->max_pos_std_m > MVT_R(0.0) &&
+    return body_config_ok(c) && mvt_imm_config_check(&c->motion) == MVT_OK && c->gate_chi2 > MVT_R(0.0) && c->paper.gamma > MVT_R(0.0) && c->paper.delta > MVT_R(0.0) &&
+           c->rules.birth_reproj_sigma > MVT_R(0.0) && c->rules.birth_min_reproj_px >= MVT_R(0.0) && c->rules.birth_min_views >= 2 &&
+           c->rules.birth_min_sep_m >= MVT_R(0.0) && c->init_vel_std_ms > MVT_R(0.0) && c->rules.confirm_window >= 1 &&
+           c->rules.seen_min_views >= 1 && c->rules.seen_max_std_m >= MVT_R(0.0) && isfinite(c->rules.seen_max_std_m) &&
+           c->rules.confirm_window <= 32 && c->rules.confirm_hits >= 1 && c->rules.confirm_hits <= c->rules.confirm_window &&
+           c->rules.tentative_max_misses >= 1 && c->rules.coast_max_s > MVT_R(0.0) && c->max_pos_std_m > MVT_R(0.0) &&
            c->volume_margin_m >= MVT_R(0.0) && c->var_floor_m2 >= MVT_R(0.0) &&
-           c->merge_width_m > MVT_R(0.0) && isfinite(c->merge_width_m) && c->dup_dist_m >= MVT_R(0.0) &&
-           c->merge_ambiguity >= MVT_R(0.0) && isfinite(c->merge_ambiguity) &&
-           isfinite(c->dup_dist_m) && c->exit_margin_m >= MVT_R(0.0) && isfinite(c->exit_margin_m) &&
-           c->exit_coast_s > MVT_R(0.0) && isfinite(c->exit_coast_s) &&
-           (c->occlusion == 0 || c->occlusion == 1) && c->body_halfwidth_m >= MVT_R(0.0) &&
-           isfinite(c->body_halfwidth_m) && c->occluded_max_s > MVT_R(0.0) && isfinite(c->occluded_max_s) &&
-           c->exclusion_m >= MVT_R(0.0) && isfinite(c->exclusion_m) &&
-           c->contra_views >= 1 && c->contra_max_s > MVT_R(0.0) && isfinite(c->contra_max_s) &&
+           c->rules.merge_width_m > MVT_R(0.0) && isfinite(c->rules.merge_width_m) && c->rules.dup_dist_m >= MVT_R(0.0) &&
+           c->rules.merge_ambiguity >= MVT_R(0.0) && isfinite(c->rules.merge_ambiguity) &&
+           isfinite(c->rules.dup_dist_m) && c->exit_margin_m >= MVT_R(0.0) && isfinite(c->exit_margin_m) &&
+           c->rules.exit_coast_s > MVT_R(0.0) && isfinite(c->rules.exit_coast_s) &&
+           (c->rules.occlusion == 0 || c->rules.occlusion == 1) && c->body_halfwidth_m >= MVT_R(0.0) &&
+           isfinite(c->body_halfwidth_m) && c->rules.occluded_max_s > MVT_R(0.0) && isfinite(c->rules.occluded_max_s) &&
+           c->rules.exclusion_m >= MVT_R(0.0) && isfinite(c->rules.exclusion_m) &&
+           c->rules.contra_views >= 1 && c->rules.contra_max_s > MVT_R(0.0) && isfinite(c->rules.contra_max_s) &&
            c->p_detect > MVT_R(0.0) && c->p_detect < MVT_R(1.0) &&
-           c->recover_s >= MVT_R(0.0) && c->recover_s <= MVT_R(3600.0) &&
-           (c->merge == MVT_MERGE_NEITHER || c->merge == MVT_MERGE_SHARE || c->merge == MVT_MERGE_OFF ||
-            c->merge == MVT_MERGE_TOP) &&
+           c->rules.recover_s >= MVT_R(0.0) && c->rules.recover_s <= MVT_R(3600.0) &&
+           (c->rules.merge == MVT_MERGE_NEITHER || c->rules.merge == MVT_MERGE_SHARE || c->rules.merge == MVT_MERGE_OFF ||
+            c->rules.merge == MVT_MERGE_TOP) &&
            (c->filter == MVT_FILTER_PROJECTIVE || c->filter == MVT_FILTER_TRIANGULATE) &&
            (c->gate == MVT_GATE_CHI2 || c->gate == MVT_GATE_PAPER) &&
            (c->lin == MVT_PKF_JACOBIAN || c->lin == MVT_PKF_PAPER || c->lin == MVT_PKF_PAPER_CENTRED);
@@ -212,7 +212,7 @@ static void step_projective(mvt_tracker_t *self, const mvt_frame_t *frame, const
         uint8_t merged[MVT_MAX_TARGETS];
         mvt_trk_associate(self, &frame->views[k], k, assign, merged);
         memset(self->top_ok, 0, sizeof(self->top_ok));
-        if (c->occlusion) {
+        if (c->rules.occlusion) {
             mvt_trk_occlusion(self, &frame->views[k], k, assign);
         }
         for (int t = 0; t < MVT_MAX_TARGETS; t++) {
@@ -271,8 +271,8 @@ static void step_triangulate(mvt_tracker_t *self, const mvt_frame_t *frame, cons
         }
         mvt_real x[3], cov[9];
         uint32_t inl = 0;
-        const mvt_real thr = c->birth_reproj_sigma * MVT_SQRT(obs[0].var_px2);
-        if (mvt_tri_robust(self->cams, obs, n, thr > c->birth_min_reproj_px ? thr : c->birth_min_reproj_px, x, &inl,
+        const mvt_real thr = c->rules.birth_reproj_sigma * MVT_SQRT(obs[0].var_px2);
+        if (mvt_tri_robust(self->cams, obs, n, thr > c->rules.birth_min_reproj_px ? thr : c->rules.birth_min_reproj_px, x, &inl,
                            NULL) != MVT_OK) {
             continue;
         }
@@ -395,7 +395,7 @@ mvt_err_t mvt_tracker_step(mvt_tracker_t *self, const mvt_frame_t *frame, mvt_ou
     } else {
         step_triangulate(self, frame, order, n_order);
     }
-    if (self->cfg.exclusion_m > MVT_R(0.0)) {
+    if (self->cfg.rules.exclusion_m > MVT_R(0.0)) {
         mvt_trk_exclusion(self);
     }
     mvt_trk_hold_height(self);

@@ -72,25 +72,23 @@ typedef enum mvt_lifecycle {
                                 clutter, a probability of existence that confirms and deletes */
 } mvt_lifecycle_t;
 
-typedef struct mvt_tracker_config {
-    mvt_filter_t filter;        /* default MVT_FILTER_PROJECTIVE */
-    mvt_pkf_lin_t lin;          /* default MVT_PKF_JACOBIAN */
-    mvt_gate_t gate;            /* default MVT_GATE_CHI2 */
-    mvt_imm_config_t motion;    /* the motion models (mvt_imm.h): default mvt_imm_config_default,
-                                   an IMM of standing, walking and manoeuvring people that needs no
-                                   tuning; mvt_imm_config_single(q) is the single constant-velocity
-                                   filter with white-acceleration density q (m^2/s^3 per axis) */
-    mvt_real gate_chi2;         /* chi-square gate, 2 dof; default 13.8 (0.1 % false rejection) */
-    mvt_real paper_gamma;       /* Eq. 23 gamma; default 6 */
-    mvt_real paper_var_m2[3];   /* Eq. 23 per-axis variance of the frame-to-frame position change
+/* The paper's gate (MVT_GATE_PAPER, Eq. 22-26). */
+typedef struct mvt_paper_gate {
+    mvt_real gamma;             /* Eq. 23 gamma; default 6 */
+    mvt_real var_m2[3];         /* Eq. 23 per-axis variance of the frame-to-frame position change
                                    (the paper's "Q learnt from ground truth"); default 0.04^2 m^2 */
-    mvt_real paper_delta;       /* Eq. 26 threshold on the normalised distance; default 1 */
+    mvt_real delta;             /* Eq. 26 threshold on the normalised distance; default 1 */
+} mvt_paper_gate_t;
+
+/* The rules lifecycle's timers and thresholds (MVT_LIFECYCLE_RULES: `--lifecycle rules`, the
+ * triangulating baseline and the particle filter's blob tracker; docs/tracking.md). The body model
+ * reads none of them. */
+typedef struct mvt_rules_config {
     mvt_real birth_reproj_sigma;/* births: max reprojection error per view, in units of the
                                    detection's sigma; default 4 */
     mvt_real birth_min_reproj_px;/* ... but never below this many pixels; default 4 */
     int birth_min_views;        /* views that must agree for a birth, >= 2; default 2 */
     mvt_real birth_min_sep_m;   /* no birth closer than this to an existing track; default 0.4 */
-    mvt_real init_vel_std_ms;   /* velocity std of a new track, m/s; default 1.0 */
     int seen_min_views;         /* a frame "sees" a track (a hit for confirmation; keeps it alive)
                                    when at least this many cameras updated it (capped at the rig's
                                    camera count), or one camera did and its position std is still
@@ -104,11 +102,6 @@ typedef struct mvt_tracker_config {
     int confirm_window;         /* N, 1..32; default 5 */
     int tentative_max_misses;   /* consecutive misses that delete a tentative track; default 2 */
     mvt_real coast_max_s;       /* a confirmed track unseen this long is deleted; default 2.0 */
-    mvt_real max_pos_std_m;     /* ... or when its position std exceeds this; default 1.0 */
-    mvt_real volume_min[3];     /* tracked volume, metres (rig file) */
-    mvt_real volume_max[3];
-    mvt_real volume_margin_m;   /* births and tracks may be this far outside; default 0.5 */
-    mvt_real var_floor_m2;      /* covariance diagonal floor; default 1e-10 */
     mvt_merge_t merge;          /* merged blobs (see mvt_merge_t); default MVT_MERGE_NEITHER */
     mvt_real merge_width_m;     /* two tracks whose predicted image points in a view are closer
                                    than this width seen at their depth are unresolved there; > 0,
@@ -118,17 +111,14 @@ typedef struct mvt_tracker_config {
                                    updates neither; >= 0, default 4 (likelihood ratio e^2) */
     mvt_real dup_dist_m;        /* two tracks closer than this in 3D are one target: the younger
                                    is deleted; >= 0 (0: never), default 0.25 */
-    mvt_real exit_margin_m;     /* a track unseen for exit_coast_s within this distance of the
-                                   volume's side walls is deleted (people leave through the sides);
-                                   >= 0, default 0.5 */
-    mvt_real exit_coast_s;      /* > 0, default 0.3 */
+    mvt_real exit_coast_s;      /* a track unseen this long within exit_margin_m of the volume's
+                                   side walls is deleted (people leave through the sides); > 0,
+                                   default 0.3 */
     int occlusion;              /* 1 (default): a confirmed track that a camera did not update
                                    although its predicted head lies in the box of a blob that camera
                                    gave to another track is taken as hidden in that blob: its image
                                    column is constrained to the box (mvt_cv_truncate) and the
                                    view counts toward keeping it alive (occluded_max_s); 0: off */
-    mvt_real body_halfwidth_m;  /* half a person's width: a hidden head lies at least this far
-                                   inside the blob's side edges; >= 0, default 0.2 */
     mvt_real occluded_max_s;    /* a track kept alive by occluded views alone is deleted after this
                                    long neither seen nor needed by its hiding blobs' boxes (a person
                                    right behind others leaves no trace in them: the guard against
@@ -142,6 +132,39 @@ typedef struct mvt_tracker_config {
                                    track seen in fewer than seen_min_views cameras this frame is kept
                                    this far from every track seen in more (mvt_cv_truncate along
                                    their horizontal separation); >= 0 (0: off), default 0.4 */
+    mvt_real recover_s;         /* identity recovery: a confirmed track deleted while its person may
+                                   still be in the room (unseen, hidden too long, contradicted, or
+                                   the duplicate that drifted onto another's person; not one that
+                                   left through a side wall or the volume, nor one too uncertain to
+                                   have a place) keeps its identity
+                                   this long, and a person born within walking reach of where it
+                                   was lost (init_vel_std_ms times the time since it last saw its
+                                   person, plus both covariances), at its head height, takes it
+                                   back (mvt_trk_recover.c); >= 0 (0: off), default 3 */
+} mvt_rules_config_t;
+
+typedef struct mvt_tracker_config {
+    mvt_filter_t filter;        /* default MVT_FILTER_PROJECTIVE */
+    mvt_pkf_lin_t lin;          /* default MVT_PKF_JACOBIAN */
+    mvt_gate_t gate;            /* default MVT_GATE_CHI2 */
+    mvt_imm_config_t motion;    /* the motion models (mvt_imm.h): default mvt_imm_config_default,
+                                   an IMM of standing, walking and manoeuvring people that needs no
+                                   tuning; mvt_imm_config_single(q) is the single constant-velocity
+                                   filter with white-acceleration density q (m^2/s^3 per axis) */
+    mvt_real gate_chi2;         /* chi-square gate, 2 dof; default 13.8 (0.1 % false rejection) */
+    mvt_paper_gate_t paper;     /* MVT_GATE_PAPER's parameters */
+    mvt_real init_vel_std_ms;   /* velocity std of a new track, m/s; default 1.0 */
+    mvt_real max_pos_std_m;     /* a track whose position std exceeds this is deleted; default 1.0 */
+    mvt_real volume_min[3];     /* tracked volume, metres (rig file) */
+    mvt_real volume_max[3];
+    mvt_real volume_margin_m;   /* births and tracks may be this far outside; default 0.5 */
+    mvt_real var_floor_m2;      /* covariance diagonal floor; default 1e-10 */
+    mvt_real exit_margin_m;     /* the band along the volume's side walls through which people
+                                   leave, m: the body model lets a track there walk out (exit_s),
+                                   the rules delete one unseen there for rules.exit_coast_s; >= 0,
+                                   default 0.5 */
+    mvt_real body_halfwidth_m;  /* half a person's width: a hidden head lies at least this far
+                                   inside the blob's side edges; >= 0, default 0.2 */
     mvt_real p_detect;          /* MVT_LIFECYCLE_BODY: the prior of each camera's detection
                                    probability, which it learns online (MVT_BODY_PD_S). Rules:
                                    probability that a camera whose picture holds a person's head
@@ -157,19 +180,11 @@ typedef struct mvt_tracker_config {
                                    same way. Association weighs it too: a track's miss costs
                                    2 ln(p_detect / (1 - p_detect)) - 2 ln(2 pi lambda) against a
                                    detection's d^2 + ln |S| (mvt_trk_assoc.c) */
-    mvt_real recover_s;         /* identity recovery: a confirmed track deleted while its person may
-                                   still be in the room (unseen, hidden too long, contradicted, or
-                                   the duplicate that drifted onto another's person; not one that
-                                   left through a side wall or the volume, nor one too uncertain to
-                                   have a place) keeps its identity
-                                   this long, and a person born within walking reach of where it
-                                   was lost (init_vel_std_ms times the time since it last saw its
-                                   person, plus both covariances), at its head height, takes it
-                                   back (mvt_trk_recover.c); >= 0 (0: off), default 3 */
-    /* MVT_LIFECYCLE_BODY's physical parameters (docs/tracking.md, "One model of a person"); it
+    mvt_lifecycle_t lifecycle;  /* default MVT_LIFECYCLE_BODY */
+    mvt_rules_config_t rules;   /* MVT_LIFECYCLE_RULES only */
+    /* MVT_LIFECYCLE_BODY's own physical parameters (docs/tracking.md, "One model of a person"); it
      * also reads p_detect, body_halfwidth_m, gate_chi2, motion, init_vel_std_ms, volume_*,
      * volume_margin_m, exit_margin_m, max_pos_std_m and var_floor_m2 above. */
-    mvt_lifecycle_t lifecycle;  /* default MVT_LIFECYCLE_RULES */
     mvt_real head_height_m;     /* mean head-top height of a standing adult, m, 1..2.5; default 1.70 */
     mvt_real head_height_sd_m;  /* its spread over people and postures a newcomer has, m, 0.02..0.5;
                                    default 0.15 */

@@ -11,7 +11,7 @@
 /* The views that place a track in a frame (seen_min_views, at most the rig's cameras). */
 static inline int mvt_trk_min_views(const mvt_tracker_t *self)
 {
-    return self->cfg.seen_min_views < self->num_cameras ? self->cfg.seen_min_views : self->num_cameras;
+    return self->cfg.rules.seen_min_views < self->num_cameras ? self->cfg.rules.seen_min_views : self->num_cameras;
 }
 
 /* Number of set bits (cameras in a mask). */

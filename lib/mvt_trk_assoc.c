@@ -61,7 +61,7 @@ static mvt_real miss_base(const mvt_tracker_t *self, int k)
 {
     const mvt_tracker_config_t *c = &self->cfg;
     if (c->gate == MVT_GATE_PAPER) {
-        return c->paper_delta;
+        return c->paper.delta;
     }
     const mvt_real pd = c->p_detect;
     const mvt_real g = MVT_R(2.0) * (MVT_LOG(pd / (MVT_R(1.0) - pd)) - MVT_LOG(MVT_R(6.2831853) * self->ev_clutter[k]));
@@ -91,7 +91,7 @@ static int unresolved(const mvt_tracker_t *self, const mvt_camera_t *cam, int t,
     const mvt_pkf_pred_t *a = &self->pred[t], *b = &self->pred[u];
     const mvt_real dx = a->h[0] - b->h[0], dy = a->h[1] - b->h[1];
     const mvt_real depth = a->depth_m < b->depth_m ? a->depth_m : b->depth_m;
-    const mvt_real w = cam->fx * self->cfg.merge_width_m / depth;
+    const mvt_real w = cam->fx * self->cfg.rules.merge_width_m / depth;
     *d2_px = dx * dx + dy * dy;
     return *d2_px < w * w;
 }
@@ -111,7 +111,7 @@ static mvt_real neg2_loglik(const mvt_tracker_t *self, int k, int t, int d)
  * merge_ambiguity in -2 log units. */
 static int ambiguous(const mvt_tracker_t *self, int k, int t, int u, int d)
 {
-    return neg2_loglik(self, k, t, d) - neg2_loglik(self, k, u, d) < self->cfg.merge_ambiguity;
+    return neg2_loglik(self, k, t, d) - neg2_loglik(self, k, u, d) < self->cfg.rules.merge_ambiguity;
 }
 
 /* Image order of two tracks' predicted heads: -1 when t is clearly above u (smaller v by more
@@ -184,7 +184,7 @@ static int hypothesise(mvt_tracker_t *self, const mvt_view_t *view, int k, const
             self->counters.numeric_faults++;
         }
     }
-    if (c->merge != MVT_MERGE_OFF) {
+    if (c->rules.merge != MVT_MERGE_OFF) {
         mvt_real best[MVT_MAX_TARGETS];
         for (int i = 0; i < n_live; i++) {
             best[live[i]] = MVT_R(0.0);
@@ -214,7 +214,7 @@ static int hypothesise(mvt_tracker_t *self, const mvt_view_t *view, int k, const
             }
             const mvt_pkf_pred_t *a = &self->pred[t], *b = &self->pred[self->merge_nb[t]];
             offset_cov(a->h[0] - b->h[0], a->h[1] - b->h[1], self->merge_cov[t]);
-            self->merge_wide[t] = c->merge == MVT_MERGE_SHARE;
+            self->merge_wide[t] = c->rules.merge == MVT_MERGE_SHARE;
         }
     }
     for (int i = 0; i < n_live; i++) { /* the colour's shift (app_cost), once per track and camera */
@@ -234,13 +234,13 @@ static int hypothesise(mvt_tracker_t *self, const mvt_view_t *view, int k, const
             if (self->pred_ok[t] && self->meas_ok[k][d] && !self->used[k][d]) {
                 mvt_pkf_innov_t in;
                 const mvt_real *extra =
-                    c->merge == MVT_MERGE_SHARE && self->merge_nb[t] >= 0 ? self->merge_cov[t] : NULL;
+                    c->rules.merge == MVT_MERGE_SHARE && self->merge_nb[t] >= 0 ? self->merge_cov[t] : NULL;
                 if (mvt_pkf_innovation_from(&self->pred[t], &self->meas[k][d], extra, &in) == MVT_OK) {
                     if (c->gate == MVT_GATE_PAPER) {
                         mvt_real dist;
-                        if (mvt_pkf_paper_distance(&self->tracks[t].s, cam, c->paper_var_m2, c->paper_gamma,
+                        if (mvt_pkf_paper_distance(&self->tracks[t].s, cam, c->paper.var_m2, c->paper.gamma,
                                                    &self->meas[k][d], &dist) == MVT_OK &&
-                            dist <= c->paper_delta) {
+                            dist <= c->paper.delta) {
                             cost = dist;
                         }
                     } else if (in.d2 <= c->gate_chi2) {
@@ -434,7 +434,7 @@ void mvt_trk_associate(mvt_tracker_t *self, const mvt_view_t *view, int k, int a
 
     /* merged blobs: a track left without a detection whose gate holds the detection of an
      * unresolved neighbour */
-    if (self->cfg.merge == MVT_MERGE_TOP) {
+    if (self->cfg.rules.merge == MVT_MERGE_TOP) {
         /* the blob's top is the higher head: a detection the assignment gave to the lower of two
          * unresolved tracks goes to the higher one when it lies in its gate */
         for (int i = 0; i < n_live; i++) {
@@ -457,7 +457,7 @@ void mvt_trk_associate(mvt_tracker_t *self, const mvt_view_t *view, int k, int a
             }
         }
     }
-    if (self->cfg.merge != MVT_MERGE_OFF) {
+    if (self->cfg.rules.merge != MVT_MERGE_OFF) {
         int shared[MVT_MAX_TARGETS];
         for (int i = 0; i < n_live; i++) {
             const int t = live[i];
@@ -472,8 +472,8 @@ void mvt_trk_associate(mvt_tracker_t *self, const mvt_view_t *view, int k, int a
                 const int d = assign[u];
                 if (u == t || d < 0 || self->cost[t][d] < MVT_R(0.0) ||
                     !unresolved(self, &self->cams[k], t, u, &d2) ||
-                    (self->cfg.merge == MVT_MERGE_TOP && top_order(self, t, u) != 0) ||
-                    (self->cfg.merge != MVT_MERGE_SHARE && !ambiguous(self, k, t, u, d))) {
+                    (self->cfg.rules.merge == MVT_MERGE_TOP && top_order(self, t, u) != 0) ||
+                    (self->cfg.rules.merge != MVT_MERGE_SHARE && !ambiguous(self, k, t, u, d))) {
                     continue;
                 }
                 if (shared[t] < 0 || self->cost[t][d] < best) {
@@ -497,7 +497,7 @@ void mvt_trk_associate(mvt_tracker_t *self, const mvt_view_t *view, int k, int a
         }
         for (int i = 0; i < n_live; i++) {
             const int t = live[i];
-            if (self->cfg.merge == MVT_MERGE_SHARE) {
+            if (self->cfg.rules.merge == MVT_MERGE_SHARE) {
                 if (shared[t] >= 0) {
                     assign[t] = shared[t];
                 }
@@ -507,7 +507,7 @@ void mvt_trk_associate(mvt_tracker_t *self, const mvt_view_t *view, int k, int a
             }
         }
     }
-    if (self->cfg.merge == MVT_MERGE_NEITHER || self->cfg.merge == MVT_MERGE_TOP) {
+    if (self->cfg.rules.merge == MVT_MERGE_NEITHER || self->cfg.rules.merge == MVT_MERGE_TOP) {
         widen_merged_tops(self, view, live, n_live, assign, (const mvt_real(*)[4])heads, who, n_heads);
     }
     for (int i = 0; i < n_live; i++) {

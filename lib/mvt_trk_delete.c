@@ -46,7 +46,7 @@ static int near_side_wall(const mvt_tracker_config_t *c, const mvt_real x[3])
  * connected components and rig 12's queue, docs/tracking.md. O(T^2). */
 static void delete_duplicates(mvt_tracker_t *self, int64_t now_us)
 {
-    const mvt_real r2 = self->cfg.dup_dist_m * self->cfg.dup_dist_m;
+    const mvt_real r2 = self->cfg.rules.dup_dist_m * self->cfg.rules.dup_dist_m;
     if (!(r2 > MVT_R(0.0))) {
         return;
     }
@@ -89,7 +89,7 @@ static void delete_duplicates(mvt_tracker_t *self, int64_t now_us)
 void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us)
 {
     const mvt_tracker_config_t *c = &self->cfg;
-    const uint32_t window = c->confirm_window >= 32 ? 0xffffffffu : ((1u << c->confirm_window) - 1u);
+    const uint32_t window = c->rules.confirm_window >= 32 ? 0xffffffffu : ((1u << c->rules.confirm_window) - 1u);
     const int min_views = mvt_trk_min_views(self);
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         mvt_track_t *tr = &self->tracks[t];
@@ -97,7 +97,7 @@ void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us)
             continue;
         }
         const int views = mvt_trk_popcount(tr->cameras_used);
-        const mvt_real std2 = c->seen_max_std_m * c->seen_max_std_m;
+        const mvt_real std2 = c->rules.seen_max_std_m * c->rules.seen_max_std_m;
         int hit = views >= min_views || (views >= 1 && tr->s.P[0] <= std2 && tr->s.P[7] <= std2 &&
                                                tr->s.P[14] <= std2);
         /* the frame's odds (p_detect): the views that saw the track against those that show its
@@ -114,12 +114,12 @@ void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us)
             hit = 1;
         }
         tr->hit_history = (tr->hit_history << 1) | (hit ? 1u : 0u);
-        const int contradicted = refuted || (!hit && mvt_trk_popcount(tr->cameras_uncovered) >= c->contra_views);
+        const int contradicted = refuted || (!hit && mvt_trk_popcount(tr->cameras_uncovered) >= c->rules.contra_views);
         if (!contradicted) {
             tr->last_consistent_us = now_us;
         }
         /* ... by views that show the place on background (or have no mask to tell) */
-        if (!refuted && (hit || mvt_trk_popcount(tr->cameras_uncovered & ~tr->cameras_fg) < c->contra_views)) {
+        if (!refuted && (hit || mvt_trk_popcount(tr->cameras_uncovered & ~tr->cameras_fg) < c->rules.contra_views)) {
             tr->last_unrefuted_us = now_us;
         }
         if (placed) {
@@ -154,9 +154,9 @@ void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us)
             /* existence: the evidence of the detections in its gates since the birth frame
              * (mvt_trk_assoc.c), a sequential test (Wald) with 1 % error either way */
             tr->exist_llr += self->ev_llr[t];
-            if (tr->misses >= c->tentative_max_misses || tr->exist_llr <= -MVT_TRK_EXIST_LLR) {
+            if (tr->misses >= c->rules.tentative_max_misses || tr->exist_llr <= -MVT_TRK_EXIST_LLR) {
                 reason = &self->counters.deleted_tentative;
-            } else if (mvt_trk_popcount(tr->hit_history & window) >= c->confirm_hits &&
+            } else if (mvt_trk_popcount(tr->hit_history & window) >= c->rules.confirm_hits &&
                        tr->exist_llr >= MVT_TRK_EXIST_LLR) {
                 mvt_trk_confirm(self, tr);
             }
@@ -165,14 +165,14 @@ void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us)
         case MVT_TRACK_COASTING:
             tr->status = tr->cameras_used != 0u ? MVT_TRACK_CONFIRMED : MVT_TRACK_COASTING;
             tr->exist_llr += self->ev_llr[t];
-            if (lost_s > c->coast_max_s) {
+            if (lost_s > c->rules.coast_max_s) {
                 reason = &self->counters.deleted_unseen;
-            } else if (unneeded_s > c->occluded_max_s) {
+            } else if (unneeded_s > c->rules.occluded_max_s) {
                 reason = &self->counters.deleted_occluded;
-            } else if (mvt_us_to_s(now_us - tr->last_unrefuted_us) > c->contra_max_s ||
-                       mvt_us_to_s(now_us - tr->last_consistent_us) > MVT_TRK_FG_CONTRA * c->contra_max_s) {
+            } else if (mvt_us_to_s(now_us - tr->last_unrefuted_us) > c->rules.contra_max_s ||
+                       mvt_us_to_s(now_us - tr->last_consistent_us) > MVT_TRK_FG_CONTRA * c->rules.contra_max_s) {
                 reason = &self->counters.deleted_contradicted;
-            } else if (lost_s > c->exit_coast_s && near_side_wall(c, tr->s.x)) {
+            } else if (lost_s > c->rules.exit_coast_s && near_side_wall(c, tr->s.x)) {
                 reason = &self->counters.deleted_exit;
             }
             break;

@@ -27,8 +27,8 @@ int mvt_trk_inside_volume(const mvt_tracker_config_t *c, const mvt_real x[3])
 
 static mvt_real birth_threshold(const mvt_tracker_config_t *c, const mvt_pkf_meas_t *m)
 {
-    const mvt_real t = c->birth_reproj_sigma * MVT_SQRT(m->var_px2);
-    return t > c->birth_min_reproj_px ? t : c->birth_min_reproj_px;
+    const mvt_real t = c->rules.birth_reproj_sigma * MVT_SQRT(m->var_px2);
+    return t > c->rules.birth_min_reproj_px ? t : c->rules.birth_min_reproj_px;
 }
 
 static int better(const mvt_birth_cand_t *a, const mvt_birth_cand_t *b)
@@ -193,7 +193,7 @@ static void collect_candidates(mvt_tracker_t *self, const mvt_frame_t *frame, co
                     cand.det[1] = (int16_t)j;
                     cand.err_px = ea + eb;
                     gather_support(self, frame, order, n_order, a, b, x, &cand);
-                    if (cand.n < c->birth_min_views) {
+                    if (cand.n < c->rules.birth_min_views) {
                         continue;
                     }
                     if (!birth_odds_ok(self, &cand)) {
@@ -209,7 +209,7 @@ static void collect_candidates(mvt_tracker_t *self, const mvt_frame_t *frame, co
 
 static int near_existing_track(const mvt_tracker_t *self, const mvt_real x[3])
 {
-    const mvt_real r2 = self->cfg.birth_min_sep_m * self->cfg.birth_min_sep_m;
+    const mvt_real r2 = self->cfg.rules.birth_min_sep_m * self->cfg.rules.birth_min_sep_m;
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         const mvt_track_t *tr = &self->tracks[t];
         if (tr->id == 0) {
@@ -263,7 +263,7 @@ static int birth(mvt_tracker_t *self, const mvt_frame_t *frame, const mvt_birth_
     }
     mvt_track_t *tr = &self->tracks[slot];
     memset(tr, 0, sizeof(*tr));
-    tr->status = c->confirm_hits <= 1 ? MVT_TRACK_CONFIRMED : MVT_TRACK_TENTATIVE;
+    tr->status = c->rules.confirm_hits <= 1 ? MVT_TRACK_CONFIRMED : MVT_TRACK_TENTATIVE;
     tr->id = mvt_trk_recover(self, x, cov, &obs, frame->utime_us, &tr->held); /* a person lost just now? */
     if (tr->id == 0) {
         tr->id = self->next_id++;
@@ -321,7 +321,7 @@ int mvt_trk_cand_point(mvt_tracker_t *self, const mvt_birth_cand_t *cand, mvt_re
     }
     int m = 0;
     const mvt_real thr = birth_threshold(c, &self->meas[cand->cam[0]][cand->det[0]]);
-    if (mvt_tri_robust(self->cams, obs, cand->n, thr, x, inliers, &m) != MVT_OK || m < c->birth_min_views ||
+    if (mvt_tri_robust(self->cams, obs, cand->n, thr, x, inliers, &m) != MVT_OK || m < c->rules.birth_min_views ||
         !mvt_trk_inside_volume(c, x)) {
         return 0;
     }
@@ -349,7 +349,7 @@ static void birth_prior(mvt_tracker_t *self, int64_t now_us, int tried, const in
     const mvt_real a = MVT_R(1.0) - MVT_EXP(-(dt > MVT_R(0.0) ? dt : MVT_R(0.0)) / MVT_TRK_BIRTH_RATE_S);
     self->birth_rate += a * ((mvt_real)tried - self->birth_rate);
     self->birth_rate_us = now_us;
-    mvt_real n = self->birth_rate * (mvt_real)self->cfg.confirm_window;
+    mvt_real n = self->birth_rate * (mvt_real)self->cfg.rules.confirm_window;
     n = n > (mvt_real)tried ? n : (mvt_real)tried;
     if (!(n > MVT_R(1.0))) {
         return;

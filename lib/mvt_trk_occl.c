@@ -131,8 +131,8 @@ mvt_trk_evidence_t mvt_trk_view_evidence(const mvt_tracker_t *self, const mvt_vi
 mvt_real mvt_trk_birth_radius_px(const mvt_tracker_t *self, int k)
 {
     const mvt_tracker_config_t *c = &self->cfg;
-    const mvt_real r = c->birth_reproj_sigma * self->cams[k].sigma_px;
-    return r > c->birth_min_reproj_px ? r : c->birth_min_reproj_px;
+    const mvt_real r = c->rules.birth_reproj_sigma * self->cams[k].sigma_px;
+    return r > c->rules.birth_min_reproj_px ? r : c->rules.birth_min_reproj_px;
 }
 
 static mvt_real clamp_q(mvt_real q)
@@ -549,7 +549,7 @@ void mvt_trk_exclusion(mvt_tracker_t *self)
             }
             const mvt_real dx = ta->s.x[0] - tb->s.x[0], dy = ta->s.x[1] - tb->s.x[1];
             const mvt_real d = MVT_SQRT(dx * dx + dy * dy);
-            if (!(d < c->exclusion_m) || !(d > MVT_R(1e-6))) {
+            if (!(d < c->rules.exclusion_m) || !(d > MVT_R(1e-6))) {
                 continue; /* far enough, or on top of each other: no direction to push along */
             }
             /* n . (x_a - x_b) >= exclusion_m, n the unit horizontal separation; each poorly seen
@@ -561,11 +561,11 @@ void mvt_trk_exclusion(mvt_tracker_t *self)
             const mvt_real va = horiz_var(&ta->s, n), vb = horiz_var(&tb->s, n);
             mvt_err_t err = MVT_OK;
             if (poor_a) {
-                err = mvt_trk_truncate_ground(self, ta, n, na, vb, nb + c->exclusion_m, nb + c->exclusion_m + MVT_R(1e3));
+                err = mvt_trk_truncate_ground(self, ta, n, na, vb, nb + c->rules.exclusion_m, nb + c->rules.exclusion_m + MVT_R(1e3));
                 self->counters.exclusion_updates += err == MVT_OK;
             }
             if (poor_b && err != MVT_ERR_INVALID) {
-                err = mvt_trk_truncate_ground(self, tb, m, -nb, va, -na + c->exclusion_m, -na + c->exclusion_m + MVT_R(1e3));
+                err = mvt_trk_truncate_ground(self, tb, m, -nb, va, -na + c->rules.exclusion_m, -na + c->rules.exclusion_m + MVT_R(1e3));
                 self->counters.exclusion_updates += err == MVT_OK;
             }
             if (err != MVT_OK && err != MVT_ERR_NUMERIC) {

@@ -118,7 +118,7 @@ void mvt_trk_reacquire(mvt_tracker_t *self, const mvt_frame_t *frame, const int 
     const mvt_tracker_config_t *c = &self->cfg;
     self->reacq_any = 0; /* reacq_det is read only when set */
     /* the lost tracks: confirmed (or coasting), horizontal std above half the closest spacing */
-    const mvt_real lost_var = MVT_R(0.25) * c->birth_min_sep_m * c->birth_min_sep_m;
+    const mvt_real lost_var = MVT_R(0.25) * c->rules.birth_min_sep_m * c->rules.birth_min_sep_m;
     if (!(lost_var > MVT_R(0.0))) {
         return;
     }

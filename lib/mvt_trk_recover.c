@@ -77,7 +77,7 @@ static void record_of(const mvt_track_t *tr, int64_t until_us, mvt_lost_t *r)
 
 void mvt_trk_lose(mvt_tracker_t *self, const mvt_track_t *tr, int64_t now_us)
 {
-    const mvt_real keep_s = self->cfg.recover_s;
+    const mvt_real keep_s = self->cfg.rules.recover_s;
     if (!(keep_s > MVT_R(0.0)) || tr->id == 0) {
         return;
     }
@@ -167,7 +167,7 @@ static int nearest_record(const mvt_tracker_t *self, const mvt_real x[3], const 
 void mvt_trk_release_contradicted(mvt_tracker_t *self, const mvt_real x[3], const mvt_real cov[9],
                                   const mvt_app_obs_t *obs, int64_t now_us)
 {
-    if (!(self->cfg.recover_s > MVT_R(0.0))) {
+    if (!(self->cfg.rules.recover_s > MVT_R(0.0))) {
         return;
     }
     int best = -1;
@@ -175,7 +175,7 @@ void mvt_trk_release_contradicted(mvt_tracker_t *self, const mvt_real x[3], cons
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         const mvt_track_t *tr = &self->tracks[t];
         if (tr->id == 0 || tr->status == MVT_TRACK_TENTATIVE || tr->misses < 1 ||
-            mvt_trk_popcount(tr->cameras_uncovered) < self->cfg.contra_views) {
+            mvt_trk_popcount(tr->cameras_uncovered) < self->cfg.rules.contra_views) {
             continue; /* tentative, seen this frame, or not contradicted by contra_views views as
                          mvt_trk_delete has it (one view's empty place, which refutes a frame, is one
                          missed detection as often as a person gone) */

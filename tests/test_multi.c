@@ -463,7 +463,7 @@ static void test_mvt_trk_existence_chain_forgets_never_flips(void **state)
 static int32_t contradicted_then_born(int views, const mvt_real at[3], mvt_real recover_s, int *alive)
 {
     init();
-    g_tracker.cfg.recover_s = recover_s;
+    g_tracker.cfg.rules.recover_s = recover_s;
     const mvt_real q[3] = {0.5f, 0.5f, 0.05f}; /* one model: the state edited below is the track's */
     mvt_imm_config_single(&g_tracker.cfg.motion, q);
     test_rng_t rng = {37};
@@ -802,8 +802,8 @@ static int32_t lost_and_born(const mvt_real back[3], double gap_s, mvt_real coas
                              int32_t *was)
 {
     init();
-    g_tracker.cfg.recover_s = recover_s;
-    g_tracker.cfg.coast_max_s = coast_s;
+    g_tracker.cfg.rules.recover_s = recover_s;
+    g_tracker.cfg.rules.coast_max_s = coast_s;
     test_rng_t rng = {23};
     const mvt_real X[1][3] = {{3.0f, 2.5f, 1.75f}};
     int64_t t = 1000000;
@@ -902,7 +902,7 @@ static int hidden_in_group(int occlusion, double *closest_m, int *covered)
     *covered = 0;
     g_sank_m = 0.0;
     init();
-    g_tracker.cfg.occlusion = occlusion;
+    g_tracker.cfg.rules.occlusion = occlusion;
     /* the occlusion reasoning alone, with the single constant-velocity model this scene was built
      * for: with the IMM default the hidden head's height drifts under the one camera that still
      * sees it while the standing model holds it stiff, and the track is lost when the person walks

@@ -535,32 +535,32 @@ static void test_mvt_tracker_init_bad_config_rejected(void **state)
     cfg.motion.outlier_persist_s = INFINITY;
     assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 5), MVT_ERR_INVALID);
     mvt_tracker_config_default(&cfg);
-    cfg.confirm_hits = 9;
+    cfg.rules.confirm_hits = 9;
     assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 5), MVT_ERR_INVALID);
     mvt_tracker_config_default(&cfg);
     cfg.volume_max[2] = cfg.volume_min[2];
     assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 5), MVT_ERR_INVALID);
     /* occlusion, exclusion and contradiction settings */
     mvt_tracker_config_default(&cfg);
-    cfg.occlusion = 2;
+    cfg.rules.occlusion = 2;
     assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 5), MVT_ERR_INVALID);
     mvt_tracker_config_default(&cfg);
     cfg.body_halfwidth_m = NAN;
     assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 5), MVT_ERR_INVALID);
     mvt_tracker_config_default(&cfg);
-    cfg.exclusion_m = -0.1f;
+    cfg.rules.exclusion_m = -0.1f;
     assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 5), MVT_ERR_INVALID);
     mvt_tracker_config_default(&cfg);
-    cfg.contra_views = 0;
+    cfg.rules.contra_views = 0;
     assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 5), MVT_ERR_INVALID);
     mvt_tracker_config_default(&cfg);
-    cfg.occluded_max_s = INFINITY;
+    cfg.rules.occluded_max_s = INFINITY;
     assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 5), MVT_ERR_INVALID);
     mvt_tracker_config_default(&cfg);
-    cfg.merge = (mvt_merge_t)7;
+    cfg.rules.merge = (mvt_merge_t)7;
     assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 5), MVT_ERR_INVALID);
     mvt_tracker_config_default(&cfg);
-    cfg.merge = MVT_MERGE_TOP;
+    cfg.rules.merge = MVT_MERGE_TOP;
     assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 5), MVT_OK);
 }
 
