@@ -15,6 +15,7 @@ def pytest_configure(config):
     config.addinivalue_line("markers", "daemon: runs build/bin/mvtrackd on logs or live LCM")
     config.addinivalue_line("markers", "detect: runs build/bin/mvtrack-detect on video")
     config.addinivalue_line("markers", "accuracy: detect tests that measure accuracy (not run under ASan)")
+    config.addinivalue_line("markers", "browser: tools/mvtrack view in headless Chromium")
 
 
 @pytest.fixture
