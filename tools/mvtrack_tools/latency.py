@@ -1,7 +1,7 @@
 """Live latency and output rate of mvtrackd at 25 fps while cameras drop out and come back.
 
     tools/mvtrack latency [--seconds 120] [--people 5] [--drop-every 20] [--drop-for 4]
-                          [--flood-camera K --flood-factor F]
+                          [--flood-camera K --flood-factor F] [--view]
 
 Starts `mvtrackd` live on a private LCM multicast port (ttl=0), publishes every camera's
 detections of people walking the SmartRoom rig at the rig's frame rate (5 cameras, +-3 ms capture
@@ -16,6 +16,9 @@ extra messages (default F = 50) with plausible capture times (the current one) a
 detections: a detector stuck in a loop, or someone replaying at line rate. The run then also
 reports the messages the daemon shed, and how well the people are tracked (share of true heads
 with a confirmed track within 0.3 m, mean error), to compare with a run without the flood.
+
+--view: tools/mvtrack view listens to the same traffic with its page open in headless Chromium for
+the whole run, to compare with a run without it.
 """
 from __future__ import annotations
 
@@ -94,6 +97,8 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--flood-camera", type=int, default=-1, help="camera index whose channel floods (default none)")
     ap.add_argument("--flood-factor", type=float, default=50.0, help="flood rate / frame rate (default 50)")
+    ap.add_argument("--view", action="store_true",
+                    help="with tools/mvtrack view listening and its page open in headless Chromium all along")
     a = ap.parse_args(argv)
     if not DAEMON.exists():
         ap.error(f"{DAEMON} not built (tools/mvtrack build)")
@@ -141,6 +146,17 @@ def main(argv=None) -> int:
         cam = rig.cameras[a.flood_camera]
         flooder = mp.Process(target=flood_process, args=(url, cam, a.flood_factor * rig.frame_rate, a.seed, stop_flood,
                                                         flood_sent), daemon=True)
+    viewer, browser = None, None
+    if a.view:
+        from .view import headless_chromium
+
+        vport = 8700 + os.getpid() % 300
+        viewer = subprocess.Popen([sys.executable, "-m", "mvtrack_tools.view", "--in", url, "--rig", str(rig_path),
+                                   "--port", str(vport)], stderr=subprocess.DEVNULL,
+                                  env=dict(os.environ, PYTHONPATH=str(REPO / "tools")))
+        time.sleep(2.0)
+        browser = headless_chromium()
+        browser.get(f"http://127.0.0.1:{vport}/")
     time.sleep(0.7)  # the daemon subscribes
     sent_last: dict[int, float] = {}
     frame_utime: list[int] = []
@@ -188,6 +204,11 @@ def main(argv=None) -> int:
         daemon.send_signal(signal.SIGTERM)
         _, err = daemon.communicate(timeout=10)
         rx.join(timeout=2)
+        if browser is not None:
+            browser.quit()
+        if viewer is not None:
+            viewer.terminate()
+            viewer.wait(timeout=10)
     print("", file=sys.stderr)
     if daemon.returncode != 0:
         print(err, file=sys.stderr)
@@ -239,7 +260,7 @@ def main(argv=None) -> int:
         "daemon_status_latency_ms_p99_last": statuses[-1].latency_ms_p99 if statuses else None,
         "daemon_status_went_down": [int(c.went_down) for c in statuses[-1].cameras] if statuses else None,
         "daemon_status_came_back": [int(c.came_back) for c in statuses[-1].cameras] if statuses else None,
-        "seconds": a.seconds, "people": a.people, "mode": a.mode,
+        "seconds": a.seconds, "people": a.people, "mode": a.mode, "view_open": bool(a.view),
         "heads_tracked_within_0.3m": hit / max(n_heads, 1),
         "mean_error_mm": 1e3 * float(np.mean(errs)) if errs else None,
         "flood_camera": a.flood_camera,
