@@ -13,6 +13,7 @@
 #include <lcm/lcm.h>
 
 #include "assembler.h"
+#include "clock.h"
 #include "mvt_pft.h"
 #include "mvt_tracker.h"
 #include "rig.h"
@@ -89,6 +90,7 @@ typedef struct mvtd {
     int publish_particles;     /* particles per target on MVTRACK_PARTICLES, 0: none */
     int64_t masks_decoded, masks_rejected;
     mvtd_asm_t assembler;
+    mvtd_clock_t clock;        /* live: each camera's clock against the others' (clock.h) */
     mvt_output_t output;
     lcm_t *lcm_in;
     lcm_t *lcm_out;            /* NULL: encode what would be published, send nothing */
@@ -101,7 +103,7 @@ typedef struct mvtd {
     int64_t bytes_encoded;     /* lcm_out NULL: size of what would have been published */
     /* rejected input by reason (never reset) */
     int64_t rej_undecodable, rej_unknown_camera, rej_bad_value, rej_over_capacity, rej_time_backwards, rej_time_ahead, rej_late,
-        rej_duplicate;
+        rej_duplicate, rej_clock;
     int64_t cam_messages[MVT_MAX_CAMERAS];
     int64_t cam_messages_at_last_status[MVT_MAX_CAMERAS];
     int64_t cam_last_frame[MVT_MAX_CAMERAS];

@@ -495,6 +495,7 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
     d->out_url = out_url;
     d->deadline_s = deadline_ms * 1e-3;
     mvtd_asm_init(&d->assembler, d->rig.num_cameras, d->rig.frame_rate, mvtd_on_frame, d);
+    mvtd_clock_init(&d->clock, d->rig.num_cameras);
     d->rig_path = rig_path;
     d->state_path = state_path;
     mvtd_ckpt_open(d);

@@ -58,6 +58,9 @@ void mvtd_publish_status(mvtd_t *d)
         cams[k].came_back = (int32_t)d->assembler.counters.came_back[k];
         cams[k].counter_restarts = (int32_t)d->cam_counter_restarts[k];
         cams[k].shed = d->cam_shed[k];
+        cams[k].clock_offset_ms = d->clock.n[k] > 0 ? (float)((double)d->clock.offset_us[k] * 1e-3) : 0.0f;
+        cams[k].clock_known = (int8_t)d->clock.confident[k];
+        cams[k].clock_refused = d->clock.refused[k];
         d->cam_messages_at_last_status[k] = d->cam_messages[k];
     }
     st.rejected_undecodable = d->rej_undecodable;
@@ -69,6 +72,7 @@ void mvtd_publish_status(mvtd_t *d)
     st.rejected_time_ahead = d->rej_time_ahead;
     st.rejected_late = d->rej_late;
     st.rejected_duplicate = d->rej_duplicate;
+    st.rejected_clock = d->rej_clock;
     float tmp[MVTD_PROC_RING];
     const int n = d->n_proc < MVTD_PROC_RING ? d->n_proc : MVTD_PROC_RING;
     memcpy(tmp, d->proc_ms, (size_t)n * sizeof(float));

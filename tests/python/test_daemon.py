@@ -343,3 +343,21 @@ def test_daemon_live_flooding_camera_shed_output_kept(tmp_path, daemon_path):
     assert r["shed_by_daemon"][1:] == [0, 0, 0, 0], r
     assert abs(r["rate_hz_mean"] - 25.0) < 0.5, r
     assert r["heads_tracked_within_0.3m"] > 0.95, r
+
+
+@pytest.mark.parametrize("skew_ms", [60, -200])
+def test_daemon_live_camera_clock_off_measured_and_corrected(tmp_path, daemon_path, skew_ms):
+    """Live, 5 cameras, 5 people; camera 2 stamps its frames skew_ms ahead of (negative: behind) the
+    others. The daemon measures the offset from when frames arrive, reports it in MVTRACK_STATUS,
+    and assembles the camera's frames on the corrected time: from 10 s on the people are tracked
+    as without the skew (tools/mvtrack latency --clock 2:MS; measured: MOTA 0.976 with and without,
+    mean error 13.0 mm against 12.9; without the correction 60 ms ahead gave MOTA 0.882, 111 mm)."""
+    import json
+    from mvtrack_tools import latency
+    latency.main(["--seconds", "13", "--drop-every", "0", "--clock", f"2:{skew_ms}", "--score-from-s", "10",
+                  "--out", str(tmp_path), "--port", str(7500 + os.getpid() % 200)])
+    r = json.loads((tmp_path / "latency.json").read_text())
+    c = r["clock"][0]
+    assert c["reported_at_10s"]["known"], r
+    assert abs(c["reported_at_10s"]["offset_ms"] - skew_ms) < 5.0, r
+    assert r["heads_tracked_within_0.3m"] > 0.95 and r["mean_error_mm"] < 30.0, r

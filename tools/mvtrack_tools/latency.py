@@ -97,9 +97,21 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--flood-camera", type=int, default=-1, help="camera index whose channel floods (default none)")
     ap.add_argument("--flood-factor", type=float, default=50.0, help="flood rate / frame rate (default 50)")
+    ap.add_argument("--clock", action="append", default=[], metavar="K:MS",
+                    help="camera K stamps its frames MS milliseconds ahead (negative: behind) of the others; "
+                         "the tracking quality is then scored from --score-from-s on")
+    ap.add_argument("--score-from-s", type=float, default=1.0,
+                    help="tracking quality over the run from this second on (default 1: tracks are being confirmed)")
     ap.add_argument("--view", action="store_true",
                     help="with tools/mvtrack view listening and its page open in headless Chromium all along")
     a = ap.parse_args(argv)
+    skew_us: dict[int, int] = {}
+    for c in a.clock:
+        try:
+            k, ms = c.split(":")
+            skew_us[int(k)] = int(round(float(ms) * 1e3))
+        except ValueError:
+            ap.error(f"--clock {c}: expected K:MS")
     if not DAEMON.exists():
         ap.error(f"{DAEMON} not built (tools/mvtrack build)")
     a.out.mkdir(parents=True, exist_ok=True)
@@ -121,13 +133,21 @@ def main(argv=None) -> int:
     statuses = []
     stop = threading.Event()
 
+    ids: dict[int, list] = {}                   # frame utime -> confirmed tracks' identities
+    status_times: list[float] = []
+
     def on_tracks(_c, data):
         m = mt.tracks_t.decode(data)
         tracks[m.utime] = (m.publish_utime, time.time())
         positions[m.utime] = [t.position for t in m.tracks if t.status != 1]
+        ids[m.utime] = [t.id for t in m.tracks if t.status != 1]
 
     def on_status(_c, data):
-        statuses.append(mt.status_t.decode(data))
+        try:
+            statuses.append(mt.status_t.decode(data))
+        except ValueError:  # another build's status type (its fingerprint): not read
+            return
+        status_times.append(time.monotonic())
 
     sub.subscribe("TRACKS", on_tracks)
     sub.subscribe("MVTRACK_STATUS", on_status)
@@ -185,7 +205,8 @@ def main(argv=None) -> int:
                 dets = [(x + rng.normal(0, 2.0), y + rng.normal(0, 2.0)) for x, y in uv
                         if 0 <= x < cam.width and 0 <= y < cam.height and rng.random() > 0.05]
                 jitter = int(rng.integers(-3000, 3001))
-                msgs.append((f"DETECTIONS_{cam.name}", camera_frame(u + jitter, f, cam, dets, 2.0).encode()))
+                msgs.append((f"DETECTIONS_{cam.name}",
+                             camera_frame(u + jitter + skew_us.get(int(k), 0), f, cam, dets, 2.0).encode()))
             for ch, data in msgs:
                 pub.publish(ch, data)
             sent_last[u] = time.time()
@@ -214,30 +235,51 @@ def main(argv=None) -> int:
         print(err, file=sys.stderr)
         return 1
 
-    # TRACKS.utime is the latest capture time in the set (jittered): match each frame by nearest
+    # TRACKS.utime is the latest capture time in the set (jittered; a camera stamping ahead, --clock,
+    # whose time the daemon does not correct, moves it by its skew): match each frame by nearest
     tk = np.array(sorted(tracks))
-    lat, matched_frames, rx_times = [], [], []
+    lat, matched_frames, rx_times, matched_tracks = [], [], [], []
     fu = np.array(frame_utime)
     for u_t in tk:
-        i = int(np.argmin(np.abs(fu - u_t)))
-        if abs(fu[i] - u_t) <= 10000:
-            pub_u, rx_t = tracks[u_t]
-            lat.append(pub_u / 1e6 - sent_last[fu[i]])
-            matched_frames.append(i)
-            rx_times.append(rx_t)
+        for skew in [0] + sorted(set(skew_us.values())):
+            i = int(np.argmin(np.abs(fu + skew - u_t)))
+            if abs(fu[i] + skew - u_t) <= 10000:
+                pub_u, rx_t = tracks[u_t]
+                lat.append(pub_u / 1e6 - sent_last[fu[i]])
+                matched_frames.append(i)
+                matched_tracks.append(u_t)
+                rx_times.append(rx_t)
+                break
     lat_ms = np.array(lat) * 1e3
-    # tracking quality: true heads with a confirmed track within 0.3 m, and their error
-    hit, errs = 0, []
-    for u_t, i in zip([u for u in tk if abs(fu[int(np.argmin(np.abs(fu - u)))] - u) <= 10000], matched_frames):
-        if i < 25:
-            continue  # the first second: tracks are being confirmed
+    # tracking quality: true heads with a confirmed track within 0.3 m, and their error; CLEAR MOT
+    from .mot import FrameSet, clear_mot
+
+    first = int(round(a.score_from_s * rig.frame_rate))
+    hit, errs, fsets = 0, [], []
+    for u_t, i in zip(matched_tracks, matched_frames):
+        if i < first:
+            continue  # tracks are being confirmed (or a clock learnt)
+        hp = np.array(positions.get(u_t, [])).reshape(-1, 3)
+        fsets.append(FrameSet(int(fu[i]), list(range(len(people[i]))), np.asarray(people[i]), list(ids.get(u_t, [])),
+                              hp, True))
         pos = np.array(positions.get(u_t, [])).reshape(-1, 3)
         for head in people[i]:
             d = np.linalg.norm(pos - head, axis=1) if len(pos) else np.array([np.inf])
             if d.min() < 0.3:
                 hit += 1
                 errs.append(float(d.min()))
-    n_heads = sum(len(people[i]) for i in matched_frames if i >= 25)
+    n_heads = sum(len(people[i]) for i in matched_frames if i >= first)
+    mot = clear_mot(fsets) if fsets else None
+    clock = []
+    for k, us in sorted(skew_us.items()):
+        def reported(st, k=k):
+            c = st.cameras[k]
+            return {"offset_ms": round(float(c.clock_offset_ms), 2), "known": bool(c.clock_known),
+                    "refused": int(c.clock_refused)}
+        at10 = next((st for st, t in zip(statuses, status_times) if t - t0 >= 10.0), None)
+        clock.append({"camera": rig.cameras[k].name, "set_ms": us / 1e3,
+                      "reported_at_10s": reported(at10) if at10 is not None else None,
+                      "reported_last": reported(statuses[-1]) if statuses else None})
     rx_times = np.array(sorted(rx_times))
     # output rate over 10 s windows, inside the run (first and last second left out)
     edges = np.arange(rx_times[0] + 1.0, rx_times[-1] - 1.0 - 10.0 + 1e-9, 10.0)
@@ -261,6 +303,9 @@ def main(argv=None) -> int:
         "daemon_status_went_down": [int(c.went_down) for c in statuses[-1].cameras] if statuses else None,
         "daemon_status_came_back": [int(c.came_back) for c in statuses[-1].cameras] if statuses else None,
         "seconds": a.seconds, "people": a.people, "mode": a.mode, "view_open": bool(a.view),
+        "score_from_s": a.score_from_s,
+        "mota": None if mot is None else mot.mota, "id_switches": None if mot is None else mot.id_switches,
+        "clock": clock,
         "heads_tracked_within_0.3m": hit / max(n_heads, 1),
         "mean_error_mm": 1e3 * float(np.mean(errs)) if errs else None,
         "flood_camera": a.flood_camera,
