@@ -26,7 +26,9 @@ about --rate times a second; GET /state.json answers with the same state:
   several --in file:// logs merge by capture time (a scene's detections and the daemon's offline
   output of it: mvtrackd --in file://scene.lcm?speed=0 --out file://tracks.lcm?mode=w).
 
-The tool is a separate process: it costs the daemon nothing but the multicast copy of each message.
+The tool is a separate process, niced (+10) so that on a machine with few cores it yields to the
+daemon; it costs the daemon the multicast copy of each message. Run a browser beside a live daemon
+niced too.
 Exit 2 with one line on bad input (a rig that cannot be read, a log that does not exist, a port
 taken).
 """
@@ -37,6 +39,7 @@ import asyncio
 import bisect
 import collections
 import json
+import os
 import sys
 import threading
 import time
@@ -501,6 +504,10 @@ def main(argv: list[str] | None = None) -> int:
                          "save a screenshot and exit")
     ap.add_argument("--at", type=float, default=0.0, help="--screenshot: seconds from the logs' start")
     a = ap.parse_args(argv)
+    try:
+        os.nice(10)  # beside a live daemon on few cores, the view yields: the tracks come first
+    except OSError:
+        pass
     try:
         if not 1.0 <= a.rate <= 30.0:
             raise ViewError(f"--rate {a.rate}: must be 1..30")
