@@ -18,7 +18,7 @@
  * is sound. Everything else is refused with one log line and a clean start. The time the daemon
  * was down counts as unobserved, not as "unseen" (see mvt_tracker_resume).
  *
- * Identities. CONTRACT: an id is never reused within a run; across restarts mvtrackd promises
+ * Identities. An id is never reused within a run (docs/interfaces.md); across restarts mvtrackd promises
  * the same. With --state, identities are leased in blocks of MVTD_ID_BLOCK: before a frame's
  * tracks carry an identity at or above the lease, the new lease is written (FILE.ids, fsync'ed)
  * and only then published. A restart continues above the lease from FILE.ids or from the

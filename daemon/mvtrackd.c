@@ -1,5 +1,5 @@
 /*
- * mvtrackd - multi-camera 3D people tracker daemon (CONTRACT section 3). The engine's interface
+ * mvtrackd - multi-camera 3D people tracker daemon (docs/interfaces.md section 3). The engine's interface
  * is mvtd.h (engine.h maps its files); this is its command-line entry point.
  */
 #include "mvtd.h"

@@ -1,5 +1,5 @@
 /*
- * rig.h - loads a rig file (CONTRACT section 2: OpenCV FileStorage YAML) into core camera
+ * rig.h - loads a rig file (docs/interfaces.md section 2: OpenCV FileStorage YAML) into core camera
  * parameters. C interface, implemented with cv::FileStorage.
  */
 #ifndef MVTD_RIG_H

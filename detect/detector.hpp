@@ -1,5 +1,5 @@
 /*
- * detector.hpp - one camera's pixels to person blobs (the producer side of CONTRACT section 3b).
+ * detector.hpp - one camera's pixels to person blobs (the producer side of docs/interfaces.md section 3b).
  *
  * Per frame: downscale by `work_scale`, per-pixel Gaussian-mixture background subtraction
  * (OpenCV's MOG2, Zivkovic's refinement of Stauffer-Grimson, or KNN) with shadow suppression,

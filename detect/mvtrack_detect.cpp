@@ -1,5 +1,5 @@
 /*
- * mvtrack-detect - camera pixels to mvtrack.camera_frame_t (CONTRACT section 3b).
+ * mvtrack-detect - camera pixels to mvtrack.camera_frame_t (docs/interfaces.md section 3b).
  *
  *   mvtrack-detect --rig RIG.yaml --video NAME=SOURCE [--video NAME=SOURCE ...] [--out URL]
  *                  [--start-utime US] [--mask-scale N] [--masks] [options]
@@ -49,9 +49,9 @@ void usage(FILE *f)
         "Camera pixels to person blobs: background subtraction (Gaussian mixture, shadows removed),\n"
         "morphology, connected components, fragments grouped into people with the rig's geometry,\n"
         "side-by-side people split at the dip between their heads. Publishes mvtrack.camera_frame_t\n"
-        "on DETECTIONS_<NAME> (CONTRACT section 3b).\n"
+        "on DETECTIONS_<NAME> (docs/interfaces.md section 3b).\n"
         "\n"
-        "  --rig FILE              rig file (CONTRACT section 2); required\n"
+        "  --rig FILE              rig file (docs/interfaces.md section 2); required\n"
         "  --video NAME=SOURCE     camera NAME of the rig reads SOURCE: a video file, an image sequence\n"
         "                          (frames/%%06d.png), a device index or /dev/videoN, a URL or pipeline.\n"
         "                          Repeatable: several sources are read in lockstep, frame by frame\n"

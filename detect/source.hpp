@@ -1,5 +1,5 @@
 /*
- * source.hpp - one camera's frames from anything cv::VideoCapture opens (CONTRACT section 3b).
+ * source.hpp - one camera's frames from anything cv::VideoCapture opens (docs/interfaces.md section 3b).
  *
  * A *file* source (a regular file or an image sequence pattern with '%') is read frame by frame;
  * frame i is stamped by the caller from its index. A frame that fails to decode is skipped and

@@ -1,5 +1,5 @@
 /*
- * mvt_mask.h - one camera's foreground mask and hue/saturation image (CONTRACT section 1).
+ * mvt_mask.h - one camera's foreground mask and hue/saturation image (docs/interfaces.md section 1).
  *
  * The mask arrives as row-major run lengths alternating background, foreground, ... starting with
  * background, at the image resolution divided by an integer factor. This is the decoder of

@@ -49,7 +49,7 @@ typedef enum mvt_merge {
     MVT_MERGE_SHARE = 1,   /* ... updates both, its covariance widened by D D^T / 3 (D: the image
                               separation of the two predictions) */
     MVT_MERGE_OFF = 2,     /* strict one-to-one assignment, no merged-blob handling */
-    MVT_MERGE_TOP = 3      /* the detector's own rule (CONTRACT: the blob's top point): the detection
+    MVT_MERGE_TOP = 3      /* the detector's own rule (docs/interfaces.md: the blob's top point): the detection
                               belongs to the track whose predicted head is the higher in the image
                               when the order is clear (2 sigma of the two predictions' v apart):
                               the other is hidden in the blob; otherwise as MVT_MERGE_NEITHER */

@@ -1,7 +1,7 @@
 /*
  * mvt_trk_app.c - a person's appearance from the colour of their blobs (mvt_trk.h).
  *
- * Where the detector sends each blob's mean hue and saturation (CONTRACT: detection_t), geometry is
+ * Where the detector sends each blob's mean hue and saturation (detection_t), geometry is
  * not the only thing that tells two people apart. Two people passing at half a metre have gates
  * that hold both heads in most views, and an identity is lost the moment the assignment
  * prefers the wrong one by a few pixels; their shirts rarely agree. And a person born again after

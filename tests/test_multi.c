@@ -74,7 +74,7 @@ static void frame_of(const mvt_real X[][3], int m, int64_t utime, test_rng_t *rn
     }
 }
 
-/* A top-of-blob detector (CONTRACT: the blob's top point): each person is a vertical cylinder of
+/* A top-of-blob detector (docs/interfaces.md: the blob's top point): each person is a vertical cylinder of
  * radius 0.22 m under the head; in each camera the silhouettes' boxes that overlap merge into one
  * blob whose reported point is its highest head (smallest v) and whose box is the union. No
  * misses, no false alarms, pixel noise sd. with_boxes 0 sends all-zero boxes. */
@@ -620,7 +620,7 @@ static int colour_decides(mvt_real hue, mvt_real sat)
             who = g_out.tracks[i].id == red ? 1 : g_out.tracks[i].id == blue ? 2 : 3;
         }
     }
-    /* the tracks report their colour (CONTRACT track_t hue, saturation) */
+    /* the tracks report their colour (track_t hue, saturation) */
     for (int i = 0; i < g_out.num_tracks; i++) {
         const int is_red = g_out.tracks[i].id == red;
         const double dh = fabs(g_out.tracks[i].hue - col[is_red ? 0 : 1][0]);

@@ -257,7 +257,7 @@ def test_daemon_live_udpm_tracks_and_stops_on_sigterm(tmp_path, daemon_path):
 
 
 def test_daemon_time_faults_counted_tracks_survive(tmp_path, daemon_path):
-    """Every time fault in CONTRACT section 3 and the trust model: the capture clock of every camera
+    """Every time fault in docs/interfaces.md section 3 and the trust model: the capture clock of every camera
     set back an hour, one camera's clock far ahead, a camera restarting its frame counter, utimes
     outside 0..2^60, duplicates, a truncated message and hostile counts. The person stays tracked,
     every frame set after the faults is processed, each fault is counted."""

@@ -1,4 +1,4 @@
-"""mvtrack-detect (CONTRACT section 3b): camera pixels to camera_frame_t.
+"""mvtrack-detect (docs/interfaces.md section 3b): camera pixels to camera_frame_t.
 
 Real footage (vtest.avi against hand-labelled heads), drawn people whose geometry is known
 (fragmented bodies, people side by side), hostile input, truncated files, lockstep time stamps and

@@ -44,7 +44,7 @@ def test_camera_project_jacobian_matches_finite_differences():
         np.testing.assert_allclose(J[:, c], fd, rtol=1e-5, atol=1e-3)
 
 
-CONTRACT_FIELDS = {
+INTERFACE_FIELDS = {
     "detection_t": ["u", "v", "sigma_px", "bbox", "score", "hue", "saturation"],
     "camera_frame_t": ["utime", "frame", "camera", "width", "height", "num_detections", "detections", "mask_width",
                        "mask_height", "num_runs", "runs", "num_hs", "hue", "saturation"],
@@ -55,11 +55,11 @@ CONTRACT_FIELDS = {
 }
 
 
-@pytest.mark.parametrize("name", sorted(CONTRACT_FIELDS))
+@pytest.mark.parametrize("name", sorted(INTERFACE_FIELDS))
 def test_lcm_types_fields_in_contract_order(name):
     mt = import_types()
     cls = getattr(mt, name)
-    assert list(cls.__slots__) == CONTRACT_FIELDS[name]
+    assert list(cls.__slots__) == INTERFACE_FIELDS[name]
 
 
 def test_lcm_track_status_constants_match_contract():

@@ -146,7 +146,7 @@ def plot(path: str, res: list[CameraResiduals], arrays: dict[str, np.ndarray], r
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="mvtrack residuals", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--rig", required=True, help="rig file (cv::FileStorage YAML, CONTRACT section 3)")
+    ap.add_argument("--rig", required=True, help="rig file (cv::FileStorage YAML, docs/interfaces.md section 2)")
     ap.add_argument("--detections", required=True, help="log with DETECTIONS_<camera> messages")
     ap.add_argument("--tracks", help="log with TRACKS (or with GROUND_TRUTH for --truth; default: --detections)")
     ap.add_argument("--truth", action="store_true", help="pair with the GROUND_TRUTH heads instead of the tracks")

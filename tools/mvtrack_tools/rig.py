@@ -1,4 +1,4 @@
-"""Camera rigs: construction, CONTRACT section 2 rig files (cv2.FileStorage) and projection.
+"""Camera rigs: construction, docs/interfaces.md section 2 rig files (cv2.FileStorage) and projection.
 
 Projection uses cv2.projectPoints, so the simulator and evaluation do not share code with the
 C core they test.
@@ -123,7 +123,7 @@ class Rig:
         fs.write("volume_max", np.asarray(self.volume_max, dtype=np.float64).reshape(3, 1))
         fs.write("frame_rate", float(self.frame_rate))
         fs.release()
-        # CONTRACT section 2 names the OpenCV 4 header; OpenCV 5 writes "%YAML 1.2".
+        # docs/interfaces.md section 2 names the OpenCV 4 header; OpenCV 5 writes "%YAML 1.2".
         text = Path(path).read_text()
         if not text.startswith("%YAML:1.0"):
             Path(path).write_text("%YAML:1.0\n" + text.split("\n", 1)[1])

@@ -149,7 +149,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--cameras", type=int, default=5, help="cameras of a --rig-seed rig (default 5)")
     ap.add_argument("--jobs", type=int, default=2, help="--video: cameras rendered in parallel (default 2)")
     ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--rig", type=Path, required=True, help="rig file to write (CONTRACT section 2)")
+    ap.add_argument("--rig", type=Path, required=True, help="rig file to write (docs/interfaces.md section 2)")
     ap.add_argument("--log", type=Path, help="LCM log to write")
     ap.add_argument("--live", metavar="URL", help="publish live at real time on this LCM URL (ttl=0)")
     ap.add_argument("--quiet", action="store_true", help="no progress bar")
