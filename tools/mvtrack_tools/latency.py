@@ -104,6 +104,7 @@ def main(argv=None) -> int:
                     help="tracking quality over the run from this second on (default 1: tracks are being confirmed)")
     ap.add_argument("--view", action="store_true",
                     help="with tools/mvtrack view listening and its page open in headless Chromium all along")
+    ap.add_argument("--view-rate", type=float, default=10.0, help="--view: the page's updates per second (default 10)")
     a = ap.parse_args(argv)
     skew_us: dict[int, int] = {}
     for c in a.clock:
@@ -172,7 +173,7 @@ def main(argv=None) -> int:
 
         vport = 8700 + os.getpid() % 300
         viewer = subprocess.Popen([sys.executable, "-m", "mvtrack_tools.view", "--in", url, "--rig", str(rig_path),
-                                   "--port", str(vport)], stderr=subprocess.DEVNULL,
+                                   "--port", str(vport), "--rate", str(a.view_rate)], stderr=subprocess.DEVNULL,
                                   env=dict(os.environ, PYTHONPATH=str(REPO / "tools")))
         time.sleep(2.0)
         browser = headless_chromium()
@@ -310,6 +311,7 @@ def main(argv=None) -> int:
         "daemon_status_went_down": [int(c.went_down) for c in statuses[-1].cameras] if statuses else None,
         "daemon_status_came_back": [int(c.came_back) for c in statuses[-1].cameras] if statuses else None,
         "seconds": a.seconds, "people": a.people, "mode": a.mode, "view_open": bool(a.view),
+        "view_rate_hz": a.view_rate if a.view else None,
         "score_from_s": a.score_from_s,
         "mota": None if mot is None else mot.mota, "id_switches": None if mot is None else mot.id_switches,
         "clock": clock,
