@@ -177,14 +177,16 @@ def main(argv=None) -> int:
                                   env=dict(os.environ, PYTHONPATH=str(REPO / "tools")))
         time.sleep(2.0)
         browser = headless_chromium()
-        # the browser niced as the view is (a viewer on the daemon's machine should yield to it)
+        browser.get(f"http://127.0.0.1:{vport}/")
+        time.sleep(1.0)
+        # the browser niced as the view is, its page's renderer included (a viewer on the daemon's
+        # machine should yield to it)
         pids = subprocess.run(["pgrep", "-f", "chromium|chromedriver"], capture_output=True, text=True).stdout.split()
         for pid in pids:
             try:
                 os.setpriority(os.PRIO_PROCESS, int(pid), 10)
             except OSError:
                 pass
-        browser.get(f"http://127.0.0.1:{vport}/")
     time.sleep(0.7)  # the daemon subscribes
     sent_last: dict[int, float] = {}
     frame_utime: list[int] = []
