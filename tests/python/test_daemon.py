@@ -361,3 +361,37 @@ def test_daemon_live_camera_clock_off_measured_and_corrected(tmp_path, daemon_pa
     assert c["reported_at_10s"]["known"], r
     assert abs(c["reported_at_10s"]["offset_ms"] - skew_ms) < 5.0, r
     assert r["heads_tracked_within_0.3m"] > 0.95 and r["mean_error_mm"] < 30.0, r
+
+
+def test_readme_subscribers_print_the_daemons_tracks(tmp_path, daemon_path):
+    """The README's subscribers (docs/subscribe_tracks.c, built as build/bin/subscribe_tracks, and
+    docs/subscribe_tracks.py) print one line per confirmed or coasting track of every TRACKS
+    message, here of the daemon's offline output of a simulated walk."""
+    import sys
+    from mvtrack_tools.paths import BUILD, REPO
+    rig = smartroom()
+    rig.write(tmp_path / "rig.yaml")
+    _, states, dets = experiment1(rig, 4.0, 100.0, False, 3)
+    w = LogWriter(str(tmp_path / "scene.lcm"))
+    write_scene(w, rig, states, dets, 100.0, progress=False)
+    w.close()
+    r = subprocess.run([str(daemon_path), "--rig", str(tmp_path / "rig.yaml"), "--in",
+                        f"file://{tmp_path / 'scene.lcm'}?speed=0", "--out", f"file://{tmp_path / 'tracks.lcm'}?mode=w"],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    tr = read_log(str(tmp_path / "tracks.lcm"), lambda c: c == "TRACKS").tracks
+    want = [f"{u} id {t.id} at {t.position[0]:.2f} {t.position[1]:.2f} {t.position[2]:.2f} m"
+            for u in sorted(tr) for t in tr[u] if t.status != 1]
+    assert len(want) > 50
+    url = f"file://{tmp_path / 'tracks.lcm'}?speed=0"
+    c = subprocess.run([str(BUILD / "bin" / "subscribe_tracks"), url], capture_output=True, text=True, timeout=60)
+    assert c.stdout.splitlines() == want
+    env = dict(os.environ, PYTHONPATH=str(BUILD / "lcmtypes" / "python"))
+    p = subprocess.Popen([sys.executable, str(REPO / "docs" / "subscribe_tracks.py"), url], stdout=subprocess.PIPE,
+                         text=True, env=env)
+    try:
+        got = [p.stdout.readline().rstrip("\n") for _ in want]  # it waits for more at the log's end
+    finally:
+        p.kill()
+        p.wait()
+    assert got == want
