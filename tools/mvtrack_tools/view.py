@@ -105,10 +105,11 @@ class State:
         self.rig = rig
         self.trail_s = trail_s
         self.lock = threading.Lock()
+        self.version = 0  # counts every change, a seek included: never goes back
         self.reset()
 
     def reset(self) -> None:
-        self.version = 0
+        self.version += 1
         self.tracks_msg = None
         self.trails: dict[int, collections.deque] = {}
         self.frames: dict[str, object] = {}
@@ -122,9 +123,7 @@ class State:
             if channel == "TRACKS":
                 self.tracks_msg = msg
                 self.newest_utime = max(self.newest_utime, int(msg.utime))
-                live = set()
                 for t in msg.tracks:
-                    live.add(int(t.id))
                     d = self.trails.setdefault(int(t.id), collections.deque())
                     d.append((int(msg.utime), float(t.position[0]), float(t.position[1])))
                 horizon = int(msg.utime - self.trail_s * 1e6)
