@@ -109,13 +109,14 @@ class State:
         self.reset()
 
     def reset(self) -> None:
-        self.version += 1
-        self.tracks_msg = None
-        self.trails: dict[int, collections.deque] = {}
-        self.frames: dict[str, object] = {}
-        self.status = None
-        self.particles = None
-        self.newest_utime = 0
+        with self.lock:
+            self.version += 1
+            self.tracks_msg = None
+            self.trails: dict[int, collections.deque] = {}
+            self.frames: dict[str, object] = {}
+            self.status = None
+            self.particles = None
+            self.newest_utime = 0
 
     def apply(self, channel: str, msg) -> None:
         with self.lock:
