@@ -194,6 +194,8 @@ class State:
                   "latency_ms_p50": round(float(status.latency_ms_p50), 3),
                   "latency_ms_p99": round(float(status.latency_ms_p99), 3),
                   "proc_ms_p99": round(float(status.proc_ms_p99), 3), "births": int(status.births),
+                  "deletions": int(sum(getattr(status, f) for f in status.__slots__ if f.startswith("deleted_"))),
+                  "rejected": int(sum(getattr(status, f) for f in status.__slots__ if f.startswith("rejected_"))),
                   "tracks_confirmed": int(status.tracks_confirmed), "frames_processed": int(status.frames_processed)}
         pl = []
         if parts is not None:
