@@ -106,6 +106,7 @@ class State:
         self.trail_s = trail_s
         self.lock = threading.Lock()
         self.version = 0  # counts every change, a seek included: never goes back
+        self._snap: dict | None = None
         self.reset()
 
     def reset(self) -> None:
@@ -143,6 +144,18 @@ class State:
                 self.particles = msg
 
     def snapshot(self) -> dict:
+        """The state the page shows, built once per change (every track projected into every
+        camera) and shared by every client and /state.json until the next change."""
+        with self.lock:
+            if self._snap is not None and self._snap["version"] == self.version:
+                return self._snap
+        snap = self._build()
+        with self.lock:
+            if snap["version"] == self.version:
+                self._snap = snap
+        return snap
+
+    def _build(self) -> dict:
         with self.lock:
             tm, frames, status, parts = self.tracks_msg, dict(self.frames), self.status, self.particles
             trails = {str(k): [[round(x, 3), round(y, 3)] for _, x, y in d] for k, d in self.trails.items()}
@@ -204,6 +217,13 @@ class State:
                 "trails": trails, "cameras": cams, "status": st, "particles": pl}
 
 
+def message_type(mt, channel: str):
+    """The LCM type the view reads on channel, or None for a channel it does not show."""
+    if channel.startswith("DETECTIONS_"):
+        return mt.camera_frame_t
+    return {"TRACKS": mt.tracks_t, "MVTRACK_STATUS": mt.status_t, "MVTRACK_PARTICLES": mt.particles_t}.get(channel)
+
+
 class Live:
     """LCM subscriber thread feeding the state."""
 
@@ -217,16 +237,13 @@ class Live:
             raise ViewError(f"cannot open LCM {url}: {e}") from None
         self.state = state
         self.stop = threading.Event()
-        decoders = {"TRACKS": self.mt.tracks_t, "MVTRACK_STATUS": self.mt.status_t,
-                    "MVTRACK_PARTICLES": self.mt.particles_t}
-        for ch, typ in decoders.items():
-            self.lc.subscribe(ch, lambda c, d, typ=typ: self._on(c, typ, d))
-        self.lc.subscribe("DETECTIONS_.*", lambda c, d: self._on(c, self.mt.camera_frame_t, d))
+        for ch in ("TRACKS", "MVTRACK_STATUS", "MVTRACK_PARTICLES", "DETECTIONS_.*"):
+            self.lc.subscribe(ch, self._on)
         self.thread = threading.Thread(target=self._run, daemon=True)
 
-    def _on(self, channel, typ, data):
+    def _on(self, channel, data):
         try:
-            msg = typ.decode(data)
+            msg = message_type(self.mt, channel).decode(data)
         except Exception:  # noqa: BLE001 - a bad message is skipped, the view goes on
             return
         self.state.apply(channel, msg)
@@ -259,7 +276,6 @@ class Replay:
         import lcm
 
         self.mt = mt = import_types()
-        typ = {"TRACKS": mt.tracks_t, "MVTRACK_STATUS": mt.status_t, "MVTRACK_PARTICLES": mt.particles_t}
         events: list[tuple[int, int, str, object]] = []  # (capture time, order, channel, message or (log, pos))
         self.logs = []
         for path in paths:
@@ -282,7 +298,7 @@ class Replay:
                         events.append((at, len(events), ch, (len(self.logs) - 1, pos)))
                         t_prev = at
                         continue
-                    t = typ.get(ch)
+                    t = message_type(mt, ch)
                     if t is None:
                         continue
                     try:
@@ -322,7 +338,7 @@ class Replay:
         log.seek(pos)
         ev = log.read_next_event()
         try:
-            return self.mt.camera_frame_t.decode(ev.data)
+            return message_type(self.mt, ch).decode(ev.data)
         except Exception:  # noqa: BLE001 - skipped, as live
             return None
 
@@ -393,9 +409,7 @@ def make_app(state: State, source, rig_info: dict | None, rate_hz: float):
     page = PAGE.read_text()
 
     def full_state() -> dict:
-        s = state.snapshot()
-        s["replay"] = source.replay_info()
-        return s
+        return dict(state.snapshot(), replay=source.replay_info())
 
     async def index(_):
         return web.Response(text=page, content_type="text/html")
@@ -413,10 +427,10 @@ def make_app(state: State, source, rig_info: dict | None, rate_hz: float):
         async def pusher():
             sent = None
             while not ws.closed:
-                s = full_state()
-                key = (s["version"], json.dumps(s["replay"]))
-                if key != sent:
-                    await ws.send_str(json.dumps(s))
+                replay = source.replay_info()
+                key = (state.version, json.dumps(replay))
+                if key != sent:  # nothing is built or sent while nothing changed
+                    await ws.send_str(json.dumps(dict(state.snapshot(), replay=replay)))
                     sent = key
                 await asyncio.sleep(1.0 / rate_hz)
 
