@@ -269,10 +269,9 @@ def main(argv=None) -> int:
     for u_t, i in zip(matched_tracks, matched_frames):
         if i < first:
             continue  # tracks are being confirmed (or a clock learnt)
-        hp = np.array(positions.get(u_t, [])).reshape(-1, 3)
-        fsets.append(FrameSet(int(fu[i]), list(range(len(people[i]))), np.asarray(people[i]), list(ids.get(u_t, [])),
-                              hp, True))
         pos = np.array(positions.get(u_t, [])).reshape(-1, 3)
+        fsets.append(FrameSet(int(fu[i]), list(range(len(people[i]))), np.asarray(people[i]), list(ids.get(u_t, [])),
+                              pos, True))
         for head in people[i]:
             d = np.linalg.norm(pos - head, axis=1) if len(pos) else np.array([np.inf])
             if d.min() < 0.3:
@@ -286,9 +285,10 @@ def main(argv=None) -> int:
             c = st.cameras[k]
             return {"offset_ms": round(float(c.clock_offset_ms), 2), "known": bool(c.clock_known),
                     "refused": int(c.clock_refused)}
-        at10 = next((st for st, t in zip(statuses, status_times) if t - t0 >= 10.0), None)
+        # what the daemon said when scoring starts (--score-from-s)
+        at = next((st for st, t in zip(statuses, status_times) if t - t0 >= a.score_from_s), None)
         clock.append({"camera": rig.cameras[k].name, "set_ms": us / 1e3,
-                      "reported_at_10s": reported(at10) if at10 is not None else None,
+                      "reported_at_score_from_s": reported(at) if at is not None else None,
                       "reported_last": reported(statuses[-1]) if statuses else None})
     rx_times = np.array(sorted(rx_times))
     # output rate over 10 s windows, inside the run (first and last second left out)
