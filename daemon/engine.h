@@ -34,13 +34,15 @@ extern uint8_t g_mvtd_encode_buf[1 << 22];
 double mvtd_wall_s(void);
 int64_t mvtd_wall_utime(void);
 
-/* stderr at a bounded rate: one line per class per second, with the count of suppressed lines. */
-void mvtd_log(mvtd_t *d, enum mvtd_log_class cls, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+/* stderr at a bounded rate: one line per class per second, with the count of suppressed lines.
+ * Returns 1 when the line was written, 0 when it was suppressed (a once-only line can try again). */
+int mvtd_log(mvtd_t *d, enum mvtd_log_class cls, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 
 /* The assembler's emit callback: tracks the frame set and publishes TRACKS. */
 void mvtd_on_frame(void *ctx, mvt_frame_t *frame, int complete);
 
-/* Cameras that went down or came back, and clock re-basings, since the last call: one line each. */
+/* Cameras that went down or came back, clock re-basings, since the last call: one line each; a
+ * camera's clock off the others' once per verdict (re-timed, refused). */
 void mvtd_log_camera_events(mvtd_t *d);
 
 #endif /* MVTD_ENGINE_H */

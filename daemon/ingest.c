@@ -176,20 +176,7 @@ void mvtd_handle(mvtd_t *d, const char *channel, const void *data, uint32_t size
         int64_t t = m.utime;
         const mvtd_clock_verdict_t cv =
             mvtd_clock_observe(&d->clock, cam, m.utime, mvtd_wall_utime(), d->assembler.half_period_us, &t);
-        const int64_t off = d->clock.offset_us[cam];
-        if (d->clock.confident[cam] && (off > MVTD_CLOCK_WARN_US || off < -MVTD_CLOCK_WARN_US)) {
-            const int level = cv == MVTD_CLOCK_FAR ? 2 : 1;
-            if (d->clock.warned[cam] != level && !d->quiet) {
-                d->clock.warned[cam] = level;
-                fprintf(stderr,
-                        level == 2 ? "mvtrackd: camera %s: its clock is %+.1f ms off the other cameras' (from arrival "
-                                     "times): beyond %.0f ms, its frames are refused\n"
-                                   : "mvtrackd: camera %s: its clock is %+.1f ms off the other cameras' (from arrival "
-                                     "times): its frames are re-timed\n",
-                        d->rig.names[cam], (double)off * 1e-3, (double)MVTD_CLOCK_MAX_US * 1e-3);
-            }
-        }
-        if (cv != MVTD_CLOCK_ACCEPT) {
+        if (cv != MVTD_CLOCK_ACCEPT) { /* said once per camera by mvtd_log_camera_events */
             d->rej_clock++;
             mvtrack_camera_frame_t_decode_cleanup(&m);
             return;

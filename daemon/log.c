@@ -23,12 +23,12 @@ int64_t mvtd_wall_utime(void)
 }
 
 
-void mvtd_log(mvtd_t *d, enum mvtd_log_class cls, const char *fmt, ...)
+int mvtd_log(mvtd_t *d, enum mvtd_log_class cls, const char *fmt, ...)
 {
     const double now = mvtd_wall_s();
     if (d->quiet || now - d->log_last_s[cls] < 1.0) {
         d->log_suppressed[cls]++;
-        return;
+        return 0;
     }
     d->log_last_s[cls] = now;
     va_list ap;
@@ -41,4 +41,5 @@ void mvtd_log(mvtd_t *d, enum mvtd_log_class cls, const char *fmt, ...)
         d->log_suppressed[cls] = 0;
     }
     fputc('\n', stderr);
+    return 1;
 }

@@ -164,6 +164,21 @@ void mvtd_log_camera_events(mvtd_t *d)
             mvtd_log(d, MVTD_LOG_CAMERA, "camera %s is back", d->rig.names[k]);
         }
     }
+    for (int k = 0; k < d->rig.num_cameras; k++) {
+        /* a camera's clock off the others' (clock.h): said once when re-timed, once when refused */
+        const int64_t off = d->clock.offset_us[k];
+        const int64_t mag = off < 0 ? -off : off;
+        const int level = !d->clock.confident[k] || mag <= MVTD_CLOCK_WARN_US ? 0 : (mag > MVTD_CLOCK_MAX_US ? 2 : 1);
+        if (level > 0 && level != d->clock.warned[k] &&
+            mvtd_log(d, MVTD_LOG_CAMERA,
+                     level == 2 ? "camera %s: its clock is %+.1f ms off the other cameras' (from arrival times): "
+                                  "beyond %.0f ms, its frames are refused"
+                                : "camera %s: its clock is %+.1f ms off the other cameras' (from arrival times): its "
+                                  "frames are re-timed (up to %.0f ms)",
+                     d->rig.names[k], (double)off * 1e-3, (double)MVTD_CLOCK_MAX_US * 1e-3)) {
+            d->clock.warned[k] = level; /* suppressed by the rate bound: said at a later call */
+        }
+    }
     if (c->clock_jumps != d->clock_jumps_seen) {
         d->clock_jumps_seen = c->clock_jumps;
         mvtd_log(d, MVTD_LOG_TIME, "capture clock went back on every camera: time re-based (offset %lld us)",
