@@ -3,6 +3,7 @@
  */
 #include "clock.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -84,4 +85,88 @@ mvtd_clock_verdict_t mvtd_clock_observe(mvtd_clock_t *c, int cam, int64_t utime,
         return MVTD_CLOCK_LEARNING;
     }
     return MVTD_CLOCK_ACCEPT;
+}
+
+void mvtd_clock_motion_sample(mvtd_clock_t *c, int cam, const double r[2], const double udot_px_s[2], int n_cameras)
+{
+    if (cam < 0 || cam >= c->num_cameras || n_cameras < 2) {
+        return; /* a track one camera updates follows that camera: its residual says nothing of time */
+    }
+    const double *udot = udot_px_s;
+    c->m_n[cam] += 1.0;
+    for (int a = 0; a < 2; a++) {
+        c->m_u[cam][a] += udot[a];
+        c->m_r[cam][a] += r[a];
+    }
+    c->m_uu[cam] += udot[0] * udot[0] + udot[1] * udot[1];
+    c->m_ru[cam] += r[0] * udot[0] + r[1] * udot[1];
+    c->m_rr[cam] += r[0] * r[0] + r[1] * r[1];
+}
+
+/* The slope d (s) of r = a - d u' over camera k's sums, and its standard error; 0 when too few. */
+static int motion_lag(const mvtd_clock_t *c, int k, double *lag_s, double *se_s)
+{
+    const double n = c->m_n[k];
+    if (n < 20.0) {
+        return 0;
+    }
+    const double mu[2] = {c->m_u[k][0] / n, c->m_u[k][1] / n}, mr[2] = {c->m_r[k][0] / n, c->m_r[k][1] / n};
+    const double suu = c->m_uu[k] - n * (mu[0] * mu[0] + mu[1] * mu[1]);
+    const double sru = c->m_ru[k] - n * (mr[0] * mu[0] + mr[1] * mu[1]);
+    const double srr = c->m_rr[k] - n * (mr[0] * mr[0] + mr[1] * mr[1]);
+    if (!(suu > 0.0)) {
+        return 0;
+    }
+    const double d = -sru / suu;
+    double var = (srr - d * d * suu) / (2.0 * n - 3.0); /* per image axis, after the fit */
+    if (!(var > 0.0)) {
+        var = 0.0;
+    }
+    *lag_s = d;
+    *se_s = sqrt(var / suu);
+    return 1;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    const double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+void mvtd_clock_motion_frame(mvtd_clock_t *c, int64_t utime_us)
+{
+    const double dt = c->motion_last_us > 0 && utime_us > c->motion_last_us ? (double)(utime_us - c->motion_last_us) * 1e-6
+                                                                              : 0.0;
+    c->motion_last_us = utime_us;
+    const double keep = exp(-dt / MVTD_CLOCK_MOTION_TAU_S);
+    double slope[MVT_MAX_CAMERAS], se[MVT_MAX_CAMERAS], sure[MVT_MAX_CAMERAS];
+    int ok[MVT_MAX_CAMERAS], n_sure = 0;
+    for (int k = 0; k < c->num_cameras; k++) {
+        c->m_n[k] *= keep;
+        c->m_u[k][0] *= keep;
+        c->m_u[k][1] *= keep;
+        c->m_r[k][0] *= keep;
+        c->m_r[k][1] *= keep;
+        c->m_uu[k] *= keep;
+        c->m_ru[k] *= keep;
+        c->m_rr[k] *= keep;
+        ok[k] = motion_lag(c, k, &slope[k], &se[k]);
+        if (ok[k] && se[k] * 1e6 < MVTD_CLOCK_MOTION_SE_US) {
+            sure[n_sure++] = slope[k];
+        }
+    }
+    /* against the median camera: the tracks lag by their cameras' mean lag, which every camera's
+     * slope carries; with three cameras or more the median is an on-time one */
+    qsort(sure, (size_t)n_sure, sizeof(sure[0]), cmp_double);
+    const double ref = n_sure == 0 ? 0.0 : n_sure % 2 ? sure[n_sure / 2] : 0.5 * (sure[n_sure / 2 - 1] + sure[n_sure / 2]);
+    for (int k = 0; k < c->num_cameras; k++) {
+        if (ok[k]) {
+            c->lag_us[k] = (slope[k] - ref) * 1e6;
+            c->lag_se_us[k] = se[k] * 1e6;
+        }
+        c->lag_known[k] = ok[k] && n_sure >= 3 && se[k] * 1e6 < MVTD_CLOCK_MOTION_SE_US;
+        const int over = c->lag_known[k] && fabs(c->lag_us[k]) > (double)MVTD_CLOCK_WARN_US &&
+                         fabs(c->lag_us[k]) > 4.0 * c->lag_se_us[k];
+        c->lag_over_since_us[k] = !over ? 0 : c->lag_over_since_us[k] != 0 ? c->lag_over_since_us[k] : utime_us;
+    }
 }

@@ -133,7 +133,9 @@ static void usage(FILE *f)
             "within a second is shed (not decoded, counted in MVTRACK_STATUS) until it calms down.\n"
             "Clocks: live, each camera's capture clock is measured against the others' from when its\n"
             "frames arrive (MVTRACK_STATUS cameras[k].clock_offset_ms); beyond 10 ms its frames are\n"
-            "re-timed by it, beyond 0.5 s refused.\n"
+            "re-timed by it, beyond 0.5 s refused. How late walking people show in its frames against\n"
+            "the tracks is measured too (cameras[k].clock_tracks_lag_ms: a detector or network slower\n"
+            "than the others'), and said once beyond 10 ms.\n"
             "\n"
             "Exit status: 0 after SIGINT/SIGTERM or at the end of a file:// log; 2 on bad arguments\n"
             "or rig; 1 when LCM cannot be opened.\n");

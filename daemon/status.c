@@ -59,6 +59,8 @@ void mvtd_publish_status(mvtd_t *d)
         cams[k].counter_restarts = (int32_t)d->cam_counter_restarts[k];
         cams[k].shed = d->cam_shed[k];
         cams[k].clock_offset_ms = d->clock.n[k] > 0 ? (float)((double)d->clock.offset_us[k] * 1e-3) : 0.0f;
+        cams[k].clock_tracks_lag_ms = (float)(d->clock.lag_us[k] * 1e-3);
+        cams[k].clock_tracks_known = (int8_t)d->clock.lag_known[k];
         cams[k].clock_known = (int8_t)d->clock.confident[k];
         cams[k].clock_refused = d->clock.refused[k];
         d->cam_messages_at_last_status[k] = d->cam_messages[k];
@@ -177,6 +179,18 @@ void mvtd_log_camera_events(mvtd_t *d)
                                   "frames are re-timed (up to %.0f ms)",
                      d->rig.names[k], (double)off * 1e-3, (double)MVTD_CLOCK_MAX_US * 1e-3)) {
             d->clock.warned[k] = level; /* suppressed by the rate bound: said at a later call */
+        }
+        /* walking people late in its frames against the tracks (clock.h): said once */
+        const double lag = d->clock.lag_us[k];
+        if (d->clock.lag_over_since_us[k] != 0 && !d->clock.lag_warned[k] &&
+            d->clock.motion_last_us - d->clock.lag_over_since_us[k] >= MVTD_CLOCK_MOTION_WARN_US &&
+            mvtd_log(d, MVTD_LOG_CAMERA,
+                     "camera %s: walking people in its frames are %+.0f ms (+-%.0f) %s the tracks: its detector or "
+                     "network is that much %s than the others' (or its clock is off and its delay hides it), so its "
+                     "frames are used that late; tracking holds, a little less precise",
+                     d->rig.names[k], lag * 1e-3, d->clock.lag_se_us[k] * 1e-3, lag > 0 ? "behind" : "ahead of",
+                     lag > 0 ? "slower" : "faster")) {
+            d->clock.lag_warned[k] = 1;
         }
     }
     if (c->clock_jumps != d->clock_jumps_seen) {

@@ -4,6 +4,7 @@
  */
 #include "engine.h"
 
+#include <math.h>
 #include <string.h>
 
 #include "mvtrack_particles_t.h"
@@ -53,6 +54,80 @@ static void publish_particles(mvtd_t *d, int64_t utime)
     PUBLISH(d, mvtrack_particles_t, "MVTRACK_PARTICLES", &msg);
 }
 
+/* Live: what the tracks say of each camera's clock (clock.h). For every confirmed track walking
+ * (over 0.3 m/s) that two other cameras updated this frame (so it does not follow this one), its
+ * residual in the camera (the nearest detection minus its head projected at the view's time)
+ * against its head's image velocity, where nothing else is near enough to be taken for it: no
+ * other detection and no other track's head within twice the gate. The gate is 30 px plus 0.15 s
+ * of the head's image motion (a lag of up to 0.15 s is seen whole). Whether this camera's own
+ * detection updated the track is not asked: the tracker refuses the detections a lag displaces
+ * most, and keeping only the ones it took would shrink the measured lag. */
+static void clock_from_tracks(mvtd_t *d, const mvt_frame_t *frame)
+{
+    const mvt_output_t *out = &d->output;
+    for (int k = 0; k < d->rig.num_cameras; k++) {
+        const mvt_view_t *v = &frame->views[k];
+        if (!v->observed || v->num_detections == 0) {
+            continue;
+        }
+        const mvt_camera_t *cam = &d->trk->cams[k];
+        const double dt = (double)(v->utime_us - out->utime_us) * 1e-6;
+        mvt_real uv[MVT_MAX_TARGETS][2];
+        int seen[MVT_MAX_TARGETS];
+        for (int i = 0; i < out->num_tracks; i++) {
+            const mvt_track_out_t *o = &out->tracks[i];
+            mvt_real x[3];
+            for (int a = 0; a < 3; a++) {
+                x[a] = o->pos_m[a] + o->vel_ms[a] * (mvt_real)dt;
+            }
+            seen[i] = mvt_cam_project(cam, x, uv[i], NULL) == MVT_OK;
+        }
+        for (int i = 0; i < out->num_tracks; i++) {
+            const mvt_track_out_t *o = &out->tracks[i];
+            const double speed = hypot((double)o->vel_ms[0], (double)o->vel_ms[1]);
+            const int others = __builtin_popcount(o->cameras_used & ~(1u << k));
+            if (!seen[i] || o->status != MVT_TRACK_CONFIRMED || others < 2 || speed < 0.3) {
+                continue;
+            }
+            mvt_real x[3], u1[2], jac[6];
+            for (int a = 0; a < 3; a++) {
+                x[a] = o->pos_m[a] + o->vel_ms[a] * (mvt_real)dt;
+            }
+            if (mvt_cam_project(cam, x, u1, jac) != MVT_OK) {
+                continue;
+            }
+            double udot[2];
+            for (int r = 0; r < 2; r++) {
+                udot[r] = (double)(jac[3 * r] * o->vel_ms[0] + jac[3 * r + 1] * o->vel_ms[1] + jac[3 * r + 2] * o->vel_ms[2]);
+            }
+            const double gate = 30.0 + 0.15 * hypot(udot[0], udot[1]);
+            double best = INFINITY, second = INFINITY;
+            int bi = -1;
+            for (int j = 0; j < v->num_detections; j++) {
+                const double e = hypot((double)(v->det[j].u - uv[i][0]), (double)(v->det[j].v - uv[i][1]));
+                if (e < best) {
+                    second = best;
+                    best = e;
+                    bi = j;
+                } else if (e < second) {
+                    second = e;
+                }
+            }
+            int alone = bi >= 0 && best < gate && second > 2.0 * gate;
+            for (int j = 0; j < out->num_tracks && alone; j++) {
+                if (j != i && seen[j] && hypot((double)(uv[j][0] - uv[i][0]), (double)(uv[j][1] - uv[i][1])) < 2.0 * gate) {
+                    alone = 0;
+                }
+            }
+            if (alone) {
+                const double r[2] = {(double)(v->det[bi].u - uv[i][0]), (double)(v->det[bi].v - uv[i][1])};
+                mvtd_clock_motion_sample(&d->clock, k, r, udot, others + 1);
+            }
+        }
+    }
+    mvtd_clock_motion_frame(&d->clock, out->utime_us);
+}
+
 void mvtd_on_frame(void *ctx, mvt_frame_t *frame, int complete)
 {
     mvtd_t *d = ctx;
@@ -65,6 +140,9 @@ void mvtd_on_frame(void *ctx, mvt_frame_t *frame, int complete)
         return;
     }
     (void)mvtd_ckpt_ids(d); /* identities leased on disk before they are published (--state) */
+    if (!d->offline) {
+        clock_from_tracks(d, frame);
+    }
     mvtrack_track_t tracks[MVT_MAX_TARGETS];
     mvtrack_tracks_t msg;
     const int64_t capture_utime = d->output.utime_us - d->assembler.offset_us; /* the cameras' clock */

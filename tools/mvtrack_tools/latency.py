@@ -100,19 +100,28 @@ def main(argv=None) -> int:
     ap.add_argument("--clock", action="append", default=[], metavar="K:MS",
                     help="camera K stamps its frames MS milliseconds ahead (negative: behind) of the others; "
                          "the tracking quality is then scored from --score-from-s on")
+    ap.add_argument("--delay", action="append", default=[], metavar="K:MS",
+                    help="camera K's messages leave MS milliseconds after the others' (its detector or network is "
+                         "slower), stamped with the true capture time")
     ap.add_argument("--score-from-s", type=float, default=1.0,
                     help="tracking quality over the run from this second on (default 1: tracks are being confirmed)")
     ap.add_argument("--view", action="store_true",
                     help="with tools/mvtrack view listening and its page open in headless Chromium all along")
     ap.add_argument("--view-rate", type=float, default=10.0, help="--view: the page's updates per second (default 10)")
     a = ap.parse_args(argv)
-    skew_us: dict[int, int] = {}
-    for c in a.clock:
-        try:
-            k, ms = c.split(":")
-            skew_us[int(k)] = int(round(float(ms) * 1e3))
-        except ValueError:
-            ap.error(f"--clock {c}: expected K:MS")
+    def per_camera(opts, name, low):
+        out: dict[int, int] = {}
+        for c in opts:
+            try:
+                k, ms = c.split(":")
+                out[int(k)] = int(round(float(ms) * 1e3))
+            except ValueError:
+                ap.error(f"{name} {c}: expected K:MS")
+            if not (0 <= int(k) < 5) or out[int(k)] < low:
+                ap.error(f"{name} {c}: K is a camera 0..4" + (", MS >= 0" if low == 0 else ""))
+        return out
+    skew_us = per_camera(a.clock, "--clock", -10 ** 9)
+    delay_us = per_camera(a.delay, "--delay", 0)
     if not DAEMON.exists():
         ap.error(f"{DAEMON} not built (tools/mvtrack build)")
     a.out.mkdir(parents=True, exist_ok=True)
@@ -197,6 +206,19 @@ def main(argv=None) -> int:
     t_flood = time.time()
     if flooder is not None:
         flooder.start()  # a process of its own: the measuring publisher keeps its interpreter
+    # --delay: (wall time due, channel, data, frame utime); latency counts from the frame's last
+    # message sent on time
+    pending: list[tuple[float, str, bytes, int]] = []
+
+    def publish_due(until: float) -> None:
+        """Publishes the delayed messages due by wall time until (monotonic), sleeping between them."""
+        while pending and pending[0][0] <= until:
+            due, ch, data, fu_ = pending.pop(0)
+            wait = due - time.monotonic()
+            if wait > 0:
+                time.sleep(wait)
+            pub.publish(ch, data)
+
     try:
         for f in range(frames):
             t = f * period
@@ -215,16 +237,22 @@ def main(argv=None) -> int:
                 dets = [(x + rng.normal(0, 2.0), y + rng.normal(0, 2.0)) for x, y in uv
                         if 0 <= x < cam.width and 0 <= y < cam.height and rng.random() > 0.05]
                 jitter = int(rng.integers(-3000, 3001))
-                msgs.append((f"DETECTIONS_{cam.name}",
+                msgs.append((int(k), f"DETECTIONS_{cam.name}",
                              camera_frame(u + jitter + skew_us.get(int(k), 0), f, cam, dets, 2.0).encode()))
-            for ch, data in msgs:
-                pub.publish(ch, data)
+            for k, ch, data in msgs:
+                if delay_us.get(k, 0) > 0:
+                    pending.append((time.monotonic() + delay_us[k] * 1e-6, ch, data, u))
+                else:
+                    pub.publish(ch, data)
+            pending.sort(key=lambda p: p[0])
             sent_last[u] = time.time()
+            publish_due(t0 + (f + 1) * period)
             delay = t0 + (f + 1) * period - time.monotonic()
             if delay > 0:
                 time.sleep(delay)
             if f % 250 == 0:
                 print(f"\rlatency: {f / frames * 100:5.1f} % of {a.seconds:.0f} s live", end="", file=sys.stderr)
+        publish_due(float("inf"))
         time.sleep(0.5)
     finally:
         stop.set()
@@ -241,20 +269,24 @@ def main(argv=None) -> int:
             viewer.terminate()
             viewer.wait(timeout=10)
     print("", file=sys.stderr)
+    (a.out / "daemon.stderr").write_text(err)
     if daemon.returncode != 0:
         print(err, file=sys.stderr)
         return 1
 
     # TRACKS.utime is the latest capture time in the set (jittered; a camera stamping ahead, --clock,
-    # whose time the daemon does not correct, moves it by its skew): match each frame by nearest
+    # whose time the daemon does not correct, moves it by its skew, and one re-timed by its arrivals,
+    # --delay, by its delay): match each frame by nearest
     tk = np.array(sorted(tracks))
     lat, matched_frames, rx_times, matched_tracks = [], [], [], []
     fu = np.array(frame_utime)
     for u_t in tk:
-        for skew in [0] + sorted(set(skew_us.values())):
+        for skew in [0] + sorted(set(skew_us.values()) | set(delay_us.values())):
             i = int(np.argmin(np.abs(fu + skew - u_t)))
             if abs(fu[i] + skew - u_t) <= 10000:
                 pub_u, rx_t = tracks[u_t]
+                if fu[i] not in sent_last:
+                    continue
                 lat.append(pub_u / 1e6 - sent_last[fu[i]])
                 matched_frames.append(i)
                 matched_tracks.append(u_t)
@@ -280,14 +312,17 @@ def main(argv=None) -> int:
     n_heads = sum(len(people[i]) for i in matched_frames if i >= first)
     mot = clear_mot(fsets) if fsets else None
     clock = []
-    for k, us in sorted(skew_us.items()):
+    for k in sorted(set(skew_us) | set(delay_us)):
+        us = skew_us.get(k, 0)
+
         def reported(st, k=k):
             c = st.cameras[k]
             return {"offset_ms": round(float(c.clock_offset_ms), 2), "known": bool(c.clock_known),
+                    "tracks_lag_ms": round(float(c.clock_tracks_lag_ms), 2), "tracks_known": bool(c.clock_tracks_known),
                     "refused": int(c.clock_refused)}
         # what the daemon said when scoring starts (--score-from-s)
         at = next((st for st, t in zip(statuses, status_times) if t - t0 >= a.score_from_s), None)
-        clock.append({"camera": rig.cameras[k].name, "set_ms": us / 1e3,
+        clock.append({"camera": rig.cameras[k].name, "set_ms": us / 1e3, "delay_ms": delay_us.get(k, 0) / 1e3,
                       "reported_at_score_from_s": reported(at) if at is not None else None,
                       "reported_last": reported(statuses[-1]) if statuses else None})
     rx_times = np.array(sorted(rx_times))

@@ -199,7 +199,10 @@ class State:
             if cs is not None:
                 entry.update({"rate_hz": round(float(cs.rate_hz), 2), "active": bool(cs.active),
                               "frames_missing": int(cs.frames_missing), "went_down": int(cs.went_down),
-                              "last_message_age_s": round(float(cs.last_message_age_s), 3)})
+                              "last_message_age_s": round(float(cs.last_message_age_s), 3),
+                              "clock_offset_ms": round(float(cs.clock_offset_ms), 1) if cs.clock_known else None,
+                              "clock_tracks_lag_ms": round(float(cs.clock_tracks_lag_ms), 1) if cs.clock_tracks_known
+                              else None})
             cams.append(entry)
         st = None
         if status is not None:
