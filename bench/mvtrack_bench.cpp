@@ -421,8 +421,8 @@ void bench_tracker_8cam(bool masks, bool rules = false)
     }
     mvt_tracker_config_t cfg;
     mvt_tracker_config_default(&cfg);
-    cfg.volume_min[0] = 0; cfg.volume_min[1] = 0; cfg.volume_min[2] = 0;
-    cfg.volume_max[0] = 8; cfg.volume_max[1] = 7; cfg.volume_max[2] = 2.5f;
+    cfg.volume.min[0] = 0; cfg.volume.min[1] = 0; cfg.volume.min[2] = 0;
+    cfg.volume.max[0] = 8; cfg.volume.max[1] = 7; cfg.volume.max[2] = 2.5f;
     if (rules) {
         cfg.lifecycle = MVT_LIFECYCLE_RULES;
     }
@@ -531,10 +531,10 @@ void bench_pf(const mvt_camera_t *cams)
     static mvt_mask_t masks[5];
     mvt_pft_config_t cfg;
     mvt_pft_config_default(&cfg);
-    cfg.det.volume_min[0] = cfg.det.volume_min[1] = cfg.det.volume_min[2] = 0;
-    cfg.det.volume_max[0] = 6;
-    cfg.det.volume_max[1] = 5;
-    cfg.det.volume_max[2] = 2.5;
+    cfg.det.volume.min[0] = cfg.det.volume.min[1] = cfg.det.volume.min[2] = 0;
+    cfg.det.volume.max[0] = 6;
+    cfg.det.volume.max[1] = 5;
+    cfg.det.volume.max[2] = 2.5;
     if (mvt_pft_init(&pft, &cfg, cams, 5) != MVT_OK) {
         std::fprintf(stderr, "mvtrack-bench: pft init failed\n");
         return;

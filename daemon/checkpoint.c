@@ -35,6 +35,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <pthread.h>
+#include <sched.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -332,6 +333,9 @@ static int write_lease_file(const mvtd_t *d, int32_t lease)
 static void *writer_main(void *arg)
 {
     (void)arg;
+    /* disk writes at normal priority, whatever the daemon runs at (--rt-priority) */
+    const struct sched_param sp = {.sched_priority = 0};
+    (void)pthread_setschedparam(pthread_self(), SCHED_OTHER, &sp);
     pthread_mutex_lock(&g_w.mu);
     for (;;) {
         while (!g_w.busy && !g_w.stop) {

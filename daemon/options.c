@@ -6,6 +6,7 @@
 #include <errno.h>
 #include <getopt.h>
 #include <math.h>
+#include <sched.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -81,7 +82,10 @@ static void usage(FILE *f)
             "                      0.5,0.5,0.05; tools/mvtrack learn-q estimates it); implies cv\n"
             "  --gate chi2|paper   association gate: innovation chi-square (default) or the paper's\n"
             "                      projected ellipsoid (Eq. 22-26)\n"
-            "  --gate-chi2 X       chi-square threshold, 2 dof (default 13.8)\n");
+            "  --gate-chi2 X       chi-square threshold, 2 dof (default 13.8)\n"
+            "  --rt-priority PRIO  handle frame sets with real-time priority PRIO (SCHED_FIFO,\n"
+            "                      1..99), before any other program on the machine gets a core (a\n"
+            "                      browser, a detector); needs root or CAP_SYS_NICE (exit 2 without)\n");
     fprintf(f,
             "\n"
             "The rules lifecycle (--lifecycle rules; kf; the particle filter's blob tracker):\n"
@@ -305,10 +309,11 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
         {"motion", required_argument, 0, 'N'},   {"motion-models", required_argument, 0, 'W'},
         {"pixels", required_argument, 0, 'x'},   {"recover", required_argument, 0, 'R'},
         {"outlier-persist", required_argument, 0, 'L'}, {"lifecycle", required_argument, 0, 'Y'},
+        {"rt-priority", required_argument, 0, 'F'},
         {0, 0, 0, 0}};
     int opt;
     optind = 1; /* callable more than once (tests, fuzzer) */
-    long particles = MVT_MAX_PARTICLES, seed = 1, publish_particles = 0;
+    long particles = MVT_MAX_PARTICLES, seed = 1, publish_particles = 0, realtime = 0;
     double exclusion_m = -1.0; /* mode-dependent default */
     double recover_s = -1.0;   /* the library's default */
     double persist_s = -1.0;   /* the library's default */
@@ -361,6 +366,11 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
             break;
         case 'Q':
             if (option_int("--publish-particles", optarg, 0, MVT_MAX_PARTICLES, &publish_particles) != 0) {
+                return 2;
+            }
+            break;
+        case 'F':
+            if (option_int("--rt-priority", optarg, 1, 99, &realtime) != 0) {
                 return 2;
             }
             break;
@@ -458,8 +468,8 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
         fprintf(stderr, "mvtrackd: rig has no volume_min/volume_max; using the camera centres' box\n");
     }
     for (int i = 0; i < 3; i++) {
-        cfg.volume_min[i] = (mvt_real)d->rig.volume_min[i];
-        cfg.volume_max[i] = (mvt_real)d->rig.volume_max[i];
+        cfg.volume.min[i] = (mvt_real)d->rig.volume_min[i];
+        cfg.volume.max[i] = (mvt_real)d->rig.volume_max[i];
     }
     mvt_camera_t cams[MVT_MAX_CAMERAS];
     for (int k = 0; k < d->rig.num_cameras; k++) {
@@ -499,6 +509,19 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
     } else if (mvt_tracker_init(&d->tracker, &cfg, cams, d->rig.num_cameras) != MVT_OK) {
         fprintf(stderr, "mvtrackd: invalid tracker configuration\n");
         return 2;
+    }
+    if (realtime > 0) {
+        /* the frame sets are handled before anything else on the machine wants a core: a browser
+         * or a detector beside the daemon cannot delay them (the checkpoint writer goes back to
+         * normal scheduling, checkpoint.c) */
+        const struct sched_param sp = {.sched_priority = (int)realtime};
+        if (sched_setscheduler(0, SCHED_FIFO, &sp) != 0) {
+            fprintf(stderr,
+                    "mvtrackd: --rt-priority %ld: %s (needs root or CAP_SYS_NICE; or let systemd set "
+                    "CPUSchedulingPolicy=fifo)\n",
+                    realtime, strerror(errno));
+            return 2;
+        }
     }
     d->offline = strncmp(in_url, "file://", 7) == 0;
     if (out_url == NULL) {

@@ -103,8 +103,8 @@ int mvt_embed_example(void (*print)(const char *line))
     mvt_tracker_config_default(&cfg);
     const mvt_real vmin[3] = {MVT_R(0.0), MVT_R(0.0), MVT_R(0.0)}, vmax[3] = {MVT_R(6.0), MVT_R(5.0), MVT_R(2.5)};
     for (int i = 0; i < 3; i++) {
-        cfg.volume_min[i] = vmin[i];
-        cfg.volume_max[i] = vmax[i];
+        cfg.volume.min[i] = vmin[i];
+        cfg.volume.max[i] = vmax[i];
     }
     if (mvt_tracker_init(&tracker, &cfg, cams, 4) != MVT_OK) {
         print("configuration rejected\n");

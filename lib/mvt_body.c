@@ -26,7 +26,7 @@ int mvt_body_silhouette(const mvt_tracker_t *self, const mvt_camera_t *cam, cons
     /* the body's half width across the line of sight, horizontally */
     mvt_real side[2] = {-(x[1] - cam->centre[1]), x[0] - cam->centre[0]};
     const mvt_real n = MVT_SQRT(side[0] * side[0] + side[1] * side[1]);
-    const mvt_real w = self->cfg.body_halfwidth_m;
+    const mvt_real w = self->cfg.body.halfwidth_m;
     if (n > MVT_R(1e-6)) {
         side[0] *= w / n;
         side[1] *= w / n;
@@ -75,7 +75,7 @@ int mvt_body_axis_at(const mvt_tracker_t *self, const mvt_camera_t *cam, const m
     }
     axis[2] = fuv[0];
     axis[3] = fuv[1];
-    axis[4] = cam->fx * self->cfg.body_halfwidth_m / depth;
+    axis[4] = cam->fx * self->cfg.body.halfwidth_m / depth;
     const mvt_real foot_depth = mvt_cam_depth(cam, foot);
     axis[5] = foot_depth > MVT_R(0.0) ? cam->fx * MVT_BODY_SHADOW_M / foot_depth : MVT_R(0.0);
     return 1;
@@ -193,8 +193,8 @@ mvt_real mvt_body_head_density(const mvt_tracker_t *self, const mvt_pkf_innov_t 
 
 int mvt_body_near_side_wall(const mvt_tracker_config_t *c, const mvt_real x[3])
 {
-    return x[0] < c->volume_min[0] + c->exit_margin_m || x[0] > c->volume_max[0] - c->exit_margin_m ||
-           x[1] < c->volume_min[1] + c->exit_margin_m || x[1] > c->volume_max[1] - c->exit_margin_m;
+    return x[0] < c->volume.min[0] + c->volume.exit_margin_m || x[0] > c->volume.max[0] - c->volume.exit_margin_m ||
+           x[1] < c->volume.min[1] + c->volume.exit_margin_m || x[1] > c->volume.max[1] - c->volume.exit_margin_m;
 }
 
 int mvt_body_in_picture(const mvt_camera_t *cam, const mvt_real uv[2])
@@ -271,7 +271,7 @@ mvt_err_t mvt_body_feet_innovation(const mvt_tracker_t *self, const mvt_cv_state
     p.hph[0] = hp[0][0] * p.H[0] + hp[0][1] * p.H[1];
     p.hph[1] = hp[0][0] * p.H[3] + hp[0][1] * p.H[4];
     p.hph[2] = hp[1][0] * p.H[3] + hp[1][1] * p.H[4];
-    const mvt_real spread_px = cam->fx * self->cfg.foot_sd_m / p.depth_m;
+    const mvt_real spread_px = cam->fx * self->cfg.body.foot_sd_m / p.depth_m;
     mvt_pkf_meas_t m;
     err = mvt_pkf_meas_make(cam, uv, MVT_SQRT(cam->sigma_px * cam->sigma_px + spread_px * spread_px), &m);
     if (err != MVT_OK) {
@@ -307,7 +307,7 @@ void mvt_body_existence(mvt_tracker_t *self, mvt_real dt)
         /* a person leaves the watched region through a side wall of the volume or through the
          * edge of every camera's picture (cameras that watch part of a larger space) */
         const int leaving = mvt_body_near_side_wall(c, x) || !in_some_picture(self, x);
-        const mvt_real hazard = MVT_R(1.0) / c->stay_s + (leaving ? MVT_R(1.0) / c->exit_s : MVT_R(0.0));
+        const mvt_real hazard = MVT_R(1.0) / c->population.stay_s + (leaving ? MVT_R(1.0) / c->population.exit_s : MVT_R(0.0));
         const mvt_real ps = MVT_EXP(-dt * hazard);
         /* r' = ps r: odds' = ps r / (1 - ps r) = ps / ((1 - ps) (1 + odds^-1) + ps odds^-1 ... ), written
          * with 1 - r = 1 / (1 + e^lo) so that a track near certainty keeps its precision in float */
@@ -328,7 +328,7 @@ static void learn_clutter(mvt_tracker_t *self, int k, mvt_real dt)
     const mvt_real a = dt > MVT_R(0.0) ? MVT_R(1.0) - MVT_EXP(-dt / MVT_BODY_CLUTTER_S) : MVT_R(0.0);
     mvt_real c = self->clutter_n[k] + a * ((mvt_real)n - self->clutter_n[k]);
     /* the prior never leaves the model: a camera that has shown no false blob for a while still may */
-    const mvt_real lo = MVT_R(0.1) * self->cfg.clutter_per_frame;
+    const mvt_real lo = MVT_R(0.1) * self->cfg.population.clutter_per_frame;
     self->clutter_n[k] = c < lo ? lo : c;
 }
 
@@ -356,7 +356,7 @@ void mvt_body_step(mvt_tracker_t *self, const mvt_frame_t *frame, const int orde
 {
     for (int k = 0; k < self->num_cameras; k++) {
         if (!(self->clutter_n[k] > MVT_R(0.0))) {
-            self->clutter_n[k] = self->cfg.clutter_per_frame;
+            self->clutter_n[k] = self->cfg.population.clutter_per_frame;
         }
         if (!(self->frag_n[k] > MVT_R(0.0))) {
             self->frag_n[k] = MVT_BODY_FRAGMENTS_PRIOR;
@@ -374,7 +374,7 @@ void mvt_body_step(mvt_tracker_t *self, const mvt_frame_t *frame, const int orde
     }
     mvt_body_existence(self, dt);
     const mvt_real typical = self->frame_dt_s;
-    const int outage = dt * self->cfg.init_vel_std_ms > MVT_R(2.0) * self->cfg.body_halfwidth_m &&
+    const int outage = dt * self->cfg.init_vel_std_ms > MVT_R(2.0) * self->cfg.body.halfwidth_m &&
                        dt > MVT_BODY_GAP_FRAMES * typical;
     if (outage) {
         /* nobody watched for longer than a person takes to walk a body's width, and for several of

@@ -2,7 +2,7 @@
  * mvt_body.h - one model of a person (MVT_LIFECYCLE_BODY): the steps of a frame, one file each
  * (internal to the core; docs/tracking.md, "One model of a person", gives the reasoning).
  *
- * A person is a head top at (x, y, z) over a body that stands on the floor, 2 body_halfwidth_m wide.
+ * A person is a head top at (x, y, z) over a body that stands on the floor, 2 body.halfwidth_m wide.
  * Its silhouette in a camera is the box around the projections (lens included) of the head's and
  * the feet's left and right edges. A blob that a camera reports is one of: the head of a person
  * (its top is the head's top; a merged blob's top is the top-most head it holds), a fragment of a
@@ -41,7 +41,7 @@
  *                born when its odds of a person against clutter allow, best first; the births and
  *                the labels of tracks that lost their person are paired all at once
  *   prune        mvt_body_prune.c: deletion by existence, uncertainty and the volume; two bodies
- *                cannot overlap (closer than body_halfwidth_m, the estimates are one person's);
+ *                cannot overlap (closer than body.halfwidth_m, the estimates are one person's);
  *                the status from the existence
  */
 #ifndef MVT_BODY_H
@@ -51,7 +51,7 @@
 
 /* A camera's clutter rate (false blobs per frame) is a running mean over this time, s. */
 #define MVT_BODY_CLUTTER_S MVT_R(10.0)
-/* A shown track whose existence fell under exist_delete sleeps this long, s, before its label is
+/* A shown track whose existence fell under population.exist_delete sleeps this long, s, before its label is
  * given up: a person lost in a knot who walks out elsewhere, or hidden longer than the existence
  * lasts, is found again under their own label (mvt_body_birth.c, heir_of). */
 #define MVT_BODY_DORMANT_S MVT_R(3.0)
@@ -157,7 +157,7 @@ mvt_real mvt_body_fragment_density(const mvt_tracker_t *self, int k, int t, cons
 /* Image point uv lies on the silhouette: within its half width and slack_px of the axis. */
 int mvt_body_on_silhouette(const mvt_real axis[MVT_BODY_AXIS_N], const mvt_real uv[2], mvt_real slack_px);
 
-/* The head x lies within exit_margin_m of the volume's side walls: where people leave. */
+/* The head x lies within volume.exit_margin_m of the volume's side walls: where people leave. */
 int mvt_body_near_side_wall(const mvt_tracker_config_t *c, const mvt_real x[3]);
 
 /* Pixel uv lies in camera cam's picture. */
@@ -175,8 +175,8 @@ mvt_real mvt_body_clutter_density(const mvt_tracker_t *self, int k);
 int mvt_body_feet_visible(const mvt_tracker_t *self, int k, const mvt_detection_t *det, int self_t, mvt_real uv[2]);
 
 /* The innovation of feet seen at uv (raw pixels) in camera k against state s: the blob's lowest
- * point is the body's edge nearest the camera on the floor, (x, y, 0) moved body_halfwidth_m toward
- * the camera, with the feet's spread (foot_sd_m at their depth) added to the
+ * point is the body's edge nearest the camera on the floor, (x, y, 0) moved body.halfwidth_m toward
+ * the camera, with the feet's spread (body.foot_sd_m at their depth) added to the
  * pixel noise. MVT_ERR_* as mvt_pkf_innovation. */
 mvt_err_t mvt_body_feet_innovation(const mvt_tracker_t *self, const mvt_cv_state_t *s, int k, const mvt_real uv[2],
                                    mvt_pkf_innov_t *in);

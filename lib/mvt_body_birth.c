@@ -2,15 +2,15 @@
  * mvt_body_birth.c - new people from the blobs no track explains, from any number of views.
  *
  * Every unexplained blob (mvt_body_explain.c) seeds a candidate. Its head lies on the blob top's
- * ray; before anything else is known, at the height of a standing adult's head (head_height_m,
- * spread head_height_sd_m along the ray: the prior). The candidate is a small Kalman estimate that
+ * ray; before anything else is known, at the height of a standing adult's head (body.head_height_m,
+ * spread body.head_height_sd_m along the ray: the prior). The candidate is a small Kalman estimate that
  * takes, in turn:
  *   the seed's feet, where visible (mvt_body_feet_visible): the point under the head on the floor;
  *   every other observed camera: its unexplained blob nearest the candidate's predicted head inside
  *   the chi-square gate, or, where the head would be in its picture and shows no such blob, the
  *   miss.
  * Its log odds of a new person against clutter start at ln(b / n): b the newcomers' heads this
- * camera expects this frame (birth_per_s dt p_detect), n its clutter rate. Each step adds the
+ * camera expects this frame (population.birth_per_s dt p_detect), n its clutter rate. Each step adds the
  * evidence: the feet's row against a bottom anywhere below the top (MVT_BODY_P_FEET), a view's
  * blob 1 - p + p N / lambda (N the density of the blob under the candidate, which before a second
  * view is spread along the projected ray: the epipolar line's length counts against the
@@ -18,8 +18,8 @@
  * covers the head). So a fragment (its feet say its top is no head's height), a false blob that
  * the other views do not see, or two unrelated blobs that meet at some height, stay unborn, while
  * a person seen by one camera alone is born from their first frames.
- * Candidates are born best first while their existence is above exist_delete, each blob used once,
- * never inside a body already there (two bodies cannot overlap: 2 body_halfwidth_m apart at least),
+ * Candidates are born best first while their existence is above population.exist_delete, each blob used once,
+ * never inside a body already there (two bodies cannot overlap: 2 body.halfwidth_m apart at least),
  * and never from a blob that lies in a newborn's silhouette below its head (its fragment). Then
  * the frame's births and the labels of the tracks that lost their person (existence under one
  * half, or asleep) are paired all at once (label_births): a birth that could be such a person
@@ -51,15 +51,15 @@ static int ray_prior(const mvt_tracker_t *self, int k, const mvt_real uv[2], mvt
     }
     mvt_real half_diag = MVT_R(0.0), centre[3];
     for (int i = 0; i < 3; i++) {
-        const mvt_real e = c->volume_max[i] - c->volume_min[i];
+        const mvt_real e = c->volume.max[i] - c->volume.min[i];
         half_diag += e * e;
-        centre[i] = MVT_R(0.5) * (c->volume_max[i] + c->volume_min[i]);
+        centre[i] = MVT_R(0.5) * (c->volume.max[i] + c->volume.min[i]);
     }
     half_diag = MVT_R(0.5) * MVT_SQRT(half_diag);
     mvt_real lam = MVT_R(-1.0), sd_par = half_diag;
     if (MVT_FABS(dir[2]) > MVT_R(1e-3)) {
-        lam = (c->head_height_m - o[2]) / dir[2];
-        sd_par = c->head_height_sd_m / MVT_FABS(dir[2]);
+        lam = (c->body.head_height_m - o[2]) / dir[2];
+        sd_par = c->body.head_height_sd_m / MVT_FABS(dir[2]);
     }
     if (!(lam > MVT_R(0.3)) || !(sd_par < half_diag)) {
         /* the ray does not reach head height in front of the camera, or runs nearly level with it:
@@ -121,7 +121,7 @@ static int seed_candidate(mvt_tracker_t *self, const mvt_frame_t *frame, const i
     mvt_cv_init(&s, x0, P0, c->init_vel_std_ms * c->init_vel_std_ms, frame->utime_us);
     /* newcomers' heads this camera expects this frame; on the first frame (dt 0) people may be
      * anywhere already: one a camera */
-    const mvt_real b = dt > MVT_R(0.0) ? c->birth_per_s * dt * c->p_detect : c->p_detect;
+    const mvt_real b = dt > MVT_R(0.0) ? c->population.birth_per_s * dt * c->population.p_detect : c->population.p_detect;
     cand->lo = MVT_LOG(b / self->clutter_n[k]);
     for (int j = 0; j < MVT_MAX_CAMERAS; j++) {
         cand->det[j] = -1;
@@ -199,7 +199,7 @@ static int admissible(const mvt_tracker_t *self, const mvt_frame_t *frame, const
             return 0;
         }
     }
-    const mvt_real sep = MVT_R(2.0) * self->cfg.body_halfwidth_m;
+    const mvt_real sep = MVT_R(2.0) * self->cfg.body.halfwidth_m;
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         const mvt_track_t *tr = &self->tracks[t];
         if (tr->id != 0 && !tr->dormant && tr->exist_lo > MVT_R(0.0) && dist2_xy(tr->s.x, cand->x) < sep * sep) {
@@ -278,7 +278,7 @@ static mvt_real heir_score(const mvt_tracker_t *self, const mvt_body_label_t *L,
 {
     mvt_real det;
     const mvt_real d2 = mvt_trk_mahalanobis3(L->x, L->P, cand->x, cand->P, &det);
-    const mvt_real sep = MVT_R(2.0) * self->cfg.body_halfwidth_m;
+    const mvt_real sep = MVT_R(2.0) * self->cfg.body.halfwidth_m;
     if (!(d2 >= MVT_R(0.0)) || !(det > MVT_R(0.0)) ||
         (!(d2 < MVT_TRK_GATE3) && !(dist2_xy(L->x, cand->x) < sep * sep))) {
         return MVT_R(-1.0);
@@ -415,7 +415,7 @@ void mvt_body_birth(mvt_tracker_t *self, const mvt_frame_t *frame, const int ord
             ws->heir_slot[ws->num_heirs++] = (int16_t)t;
         }
     }
-    const mvt_real lo_min = mvt_body_logit(self->cfg.exist_delete);
+    const mvt_real lo_min = mvt_body_logit(self->cfg.population.exist_delete);
     for (;;) {
         int best = -1;
         for (int i = 0; i < ws->num_cand; i++) {

@@ -2,20 +2,20 @@
  * mvt_body_prune.c - the end of a frame: which tracks end, which are one person, and each track's
  * status, all from the model.
  *
- * A track ends when its existence falls under exist_delete (the cameras say nobody is there, or
+ * A track ends when its existence falls under population.exist_delete (the cameras say nobody is there, or
  * its person walked out through a wall): one that was shown confirmed first sleeps (dormant, unseen
  * and unshown) MVT_BODY_DORMANT_S, its label kept for the person found again nearby, unless it is
  * by a side wall and its velocity carries it out through that wall (its person left; one walking
  * along the wall sleeps like any other). It ends too
  * when its horizontal position is spread wider than
  * max_pos_std_m (nobody has seen it for long: it is nowhere in particular), or when it leaves the
- * volume widened by volume_margin_m.
+ * volume widened by volume.margin_m.
  * Bodies do not overlap: a track no camera placed this frame is kept a body's width from those the
  * cameras placed and from likelier unplaced ones (a truncation along their horizontal separation).
- * Two heads closer than body_halfwidth_m horizontally, one of them placed this frame, are one person (two bodies cannot stand
+ * Two heads closer than body.halfwidth_m horizontally, one of them placed this frame, are one person (two bodies cannot stand
  * inside each other): the track with the likelier estimate (the higher existence) goes on with its
  * own identity, or with the other's when only the other was shown confirmed.
- * Status: confirmed from the frame the existence first reaches exist_confirm, for as long as it
+ * Status: confirmed from the frame the existence first reaches population.exist_confirm, for as long as it
  * stays above one half (more likely there than not; coasting when no camera saw the head this
  * frame); tentative otherwise: a track that drops under one half keeps its identity and is shown
  * confirmed again when its evidence returns.
@@ -37,10 +37,10 @@ static void end_track(mvt_tracker_t *self, mvt_track_t *tr, uint64_t *reason)
  * walking pace): its person left. */
 static int heading_out(const mvt_tracker_config_t *c, const mvt_track_t *tr)
 {
-    const mvt_real m = c->exit_margin_m, v = MVT_R(0.1) * c->init_vel_std_ms;
+    const mvt_real m = c->volume.exit_margin_m, v = MVT_R(0.1) * c->init_vel_std_ms;
     const mvt_real *x = tr->s.x;
-    return (x[0] < c->volume_min[0] + m && x[3] < -v) || (x[0] > c->volume_max[0] - m && x[3] > v) ||
-           (x[1] < c->volume_min[1] + m && x[4] < -v) || (x[1] > c->volume_max[1] - m && x[4] > v);
+    return (x[0] < c->volume.min[0] + m && x[3] < -v) || (x[0] > c->volume.max[0] - m && x[3] > v) ||
+           (x[1] < c->volume.min[1] + m && x[4] < -v) || (x[1] > c->volume.max[1] - m && x[4] > v);
 }
 
 static int shown(const mvt_track_t *tr)
@@ -51,8 +51,8 @@ static int shown(const mvt_track_t *tr)
 void mvt_body_prune(mvt_tracker_t *self)
 {
     const mvt_tracker_config_t *c = &self->cfg;
-    const mvt_real lo_delete = mvt_body_logit(c->exist_delete);
-    const mvt_real lo_confirm = mvt_body_logit(c->exist_confirm);
+    const mvt_real lo_delete = mvt_body_logit(c->population.exist_delete);
+    const mvt_real lo_confirm = mvt_body_logit(c->population.exist_confirm);
     const mvt_real max_var = c->max_pos_std_m * c->max_pos_std_m;
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         mvt_track_t *tr = &self->tracks[t];
@@ -83,9 +83,9 @@ void mvt_body_prune(mvt_tracker_t *self)
         }
     }
     /* bodies do not overlap: a track no camera placed this frame (hidden, or missed) is kept a
-     * body's width (2 body_halfwidth_m, horizontally) from every track a camera placed and from
+     * body's width (2 body.halfwidth_m, horizontally) from every track a camera placed and from
      * every likelier one nobody placed; its height stays as it is (a ground-plane truncation) */
-    const mvt_real width = MVT_R(2.0) * c->body_halfwidth_m;
+    const mvt_real width = MVT_R(2.0) * c->body.halfwidth_m;
     for (int a = 0; a < MVT_MAX_TARGETS; a++) {
         mvt_track_t *ta = &self->tracks[a];
         if (ta->id == 0 || ta->cameras_used != 0u || ta->dormant) {
@@ -110,7 +110,7 @@ void mvt_body_prune(mvt_tracker_t *self)
             }
         }
     }
-    const mvt_real sep2 = c->body_halfwidth_m * c->body_halfwidth_m;
+    const mvt_real sep2 = c->body.halfwidth_m * c->body.halfwidth_m;
     for (int a = 0; a < MVT_MAX_TARGETS; a++) {
         for (int b = a + 1; b < MVT_MAX_TARGETS && self->tracks[a].id != 0; b++) {
             mvt_track_t *ta = &self->tracks[a], *tb = &self->tracks[b];

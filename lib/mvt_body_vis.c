@@ -51,7 +51,7 @@ static int head_on_background(const mvt_tracker_t *self, const mvt_view_t *view,
 void mvt_body_visibility(mvt_tracker_t *self, const mvt_view_t *view, int k)
 {
     if (!(self->p_detect_k[k] > MVT_R(0.0))) {
-        self->p_detect_k[k] = self->cfg.p_detect;
+        self->p_detect_k[k] = self->cfg.population.p_detect;
     }
     if (!(self->p_hidden_k[k] > MVT_R(0.0))) {
         self->p_hidden_k[k] = MVT_BODY_P_SHOWN_HIDDEN; /* the prior */

@@ -62,7 +62,7 @@ static int time_ok(int64_t t, int64_t now)
 static int place_ok(const mvt_tracker_config_t *c, const mvt_real pos[3], const mvt_real vel[3])
 {
     for (int i = 0; i < 3; i++) {
-        if (!(pos[i] >= c->volume_min[i] - MVT_PERSIST_SLACK_M && pos[i] <= c->volume_max[i] + MVT_PERSIST_SLACK_M) ||
+        if (!(pos[i] >= c->volume.min[i] - MVT_PERSIST_SLACK_M && pos[i] <= c->volume.max[i] + MVT_PERSIST_SLACK_M) ||
             !(MVT_FABS(vel[i]) <= MVT_PERSIST_MAX_SPEED)) {
             return 0;
         }
@@ -147,7 +147,7 @@ static int lost_ok(const mvt_tracker_config_t *c, const mvt_lost_t *r, int64_t n
 /* The head height of the last frame seen: in the volume widened like positions, a variance. */
 static int seen_height_ok(const mvt_tracker_config_t *c, const mvt_track_t *tr)
 {
-    return tr->seen_z >= c->volume_min[2] - MVT_PERSIST_SLACK_M && tr->seen_z <= c->volume_max[2] + MVT_PERSIST_SLACK_M &&
+    return tr->seen_z >= c->volume.min[2] - MVT_PERSIST_SLACK_M && tr->seen_z <= c->volume.max[2] + MVT_PERSIST_SLACK_M &&
            tr->seen_zz >= MVT_R(0.0) && tr->seen_zz <= MVT_PERSIST_MAX_VAR;
 }
 

@@ -22,11 +22,11 @@ void mvt_tracker_config_default(mvt_tracker_config_t *c)
     c->paper.gamma = MVT_R(6.0);
     for (int i = 0; i < 3; i++) {
         c->paper.var_m2[i] = MVT_R(0.04) * MVT_R(0.04);
-        c->volume_min[i] = MVT_R(-5.0);
-        c->volume_max[i] = MVT_R(5.0);
+        c->volume.min[i] = MVT_R(-5.0);
+        c->volume.max[i] = MVT_R(5.0);
     }
-    c->volume_min[2] = MVT_R(0.0);
-    c->volume_max[2] = MVT_R(3.0);
+    c->volume.min[2] = MVT_R(0.0);
+    c->volume.max[2] = MVT_R(3.0);
     c->paper.delta = MVT_R(1.0);
     c->rules.birth_reproj_sigma = MVT_R(4.0);
     c->rules.birth_min_reproj_px = MVT_R(4.0);
@@ -40,52 +40,52 @@ void mvt_tracker_config_default(mvt_tracker_config_t *c)
     c->rules.tentative_max_misses = 2;
     c->rules.coast_max_s = MVT_R(2.0);
     c->max_pos_std_m = MVT_R(1.0);
-    c->volume_margin_m = MVT_R(0.5);
+    c->volume.margin_m = MVT_R(0.5);
     c->var_floor_m2 = MVT_R(1e-10);
     c->rules.merge = MVT_MERGE_NEITHER;
     c->rules.merge_width_m = MVT_R(0.5);
     c->rules.merge_ambiguity = MVT_R(4.0);
     c->rules.dup_dist_m = MVT_R(0.25);
-    c->exit_margin_m = MVT_R(0.5);
+    c->volume.exit_margin_m = MVT_R(0.5);
     c->rules.exit_coast_s = MVT_R(0.3);
     c->rules.occlusion = 1;
-    c->body_halfwidth_m = MVT_R(0.2);
+    c->body.halfwidth_m = MVT_R(0.2);
     c->rules.occluded_max_s = MVT_R(10.0);
     c->rules.exclusion_m = MVT_R(0.4);
     c->rules.contra_views = 2;
     c->rules.contra_max_s = MVT_R(0.5);
-    c->p_detect = MVT_R(0.9);
+    c->population.p_detect = MVT_R(0.9);
     c->rules.recover_s = MVT_R(3.0);
     c->lifecycle = MVT_LIFECYCLE_BODY;
-    c->head_height_m = MVT_R(1.70);
-    c->head_height_sd_m = MVT_R(0.15);
-    c->foot_sd_m = MVT_R(0.12);
-    c->birth_per_s = MVT_R(0.1);
-    c->stay_s = MVT_R(600.0);
-    c->exit_s = MVT_R(2.0);
-    c->clutter_per_frame = MVT_R(0.5);
-    c->exist_confirm = MVT_R(0.9);
-    c->exist_delete = MVT_R(0.01);
+    c->body.head_height_m = MVT_R(1.70);
+    c->body.head_height_sd_m = MVT_R(0.15);
+    c->body.foot_sd_m = MVT_R(0.12);
+    c->population.birth_per_s = MVT_R(0.1);
+    c->population.stay_s = MVT_R(600.0);
+    c->population.exit_s = MVT_R(2.0);
+    c->population.clutter_per_frame = MVT_R(0.5);
+    c->population.exist_confirm = MVT_R(0.9);
+    c->population.exist_delete = MVT_R(0.01);
 }
 
 /* MVT_LIFECYCLE_BODY's parameters in their physical ranges (mvt_tracker.h). */
 static int body_config_ok(const mvt_tracker_config_t *c)
 {
     return (c->lifecycle == MVT_LIFECYCLE_RULES || c->lifecycle == MVT_LIFECYCLE_BODY) &&
-           c->head_height_m >= MVT_R(1.0) && c->head_height_m <= MVT_R(2.5) && c->head_height_sd_m >= MVT_R(0.02) &&
-           c->head_height_sd_m <= MVT_R(0.5) && c->foot_sd_m >= MVT_R(0.01) && c->foot_sd_m <= MVT_R(0.5) &&
-           c->birth_per_s >= MVT_R(1e-4) && c->birth_per_s <= MVT_R(10.0) && c->stay_s > MVT_R(0.0) &&
-           isfinite(c->stay_s) && c->exit_s > MVT_R(0.0) && isfinite(c->exit_s) &&
-           c->clutter_per_frame >= MVT_R(0.01) && c->clutter_per_frame <= MVT_R(100.0) &&
-           c->exist_confirm > MVT_R(0.5) && c->exist_confirm < MVT_R(1.0) && c->exist_delete > MVT_R(0.0) &&
-           c->exist_delete < MVT_R(0.5) && c->body_halfwidth_m > MVT_R(0.0);
+           c->body.head_height_m >= MVT_R(1.0) && c->body.head_height_m <= MVT_R(2.5) && c->body.head_height_sd_m >= MVT_R(0.02) &&
+           c->body.head_height_sd_m <= MVT_R(0.5) && c->body.foot_sd_m >= MVT_R(0.01) && c->body.foot_sd_m <= MVT_R(0.5) &&
+           c->population.birth_per_s >= MVT_R(1e-4) && c->population.birth_per_s <= MVT_R(10.0) && c->population.stay_s > MVT_R(0.0) &&
+           isfinite(c->population.stay_s) && c->population.exit_s > MVT_R(0.0) && isfinite(c->population.exit_s) &&
+           c->population.clutter_per_frame >= MVT_R(0.01) && c->population.clutter_per_frame <= MVT_R(100.0) &&
+           c->population.exist_confirm > MVT_R(0.5) && c->population.exist_confirm < MVT_R(1.0) && c->population.exist_delete > MVT_R(0.0) &&
+           c->population.exist_delete < MVT_R(0.5) && c->body.halfwidth_m > MVT_R(0.0);
 }
 
 static int config_ok(const mvt_tracker_config_t *c)
 {
     for (int i = 0; i < 3; i++) {
         if (!(c->paper.var_m2[i] > MVT_R(0.0)) ||
-            !isfinite(c->volume_min[i]) || !isfinite(c->volume_max[i]) || !(c->volume_max[i] > c->volume_min[i])) {
+            !isfinite(c->volume.min[i]) || !isfinite(c->volume.max[i]) || !(c->volume.max[i] > c->volume.min[i])) {
             return 0;
         }
     }
@@ -95,16 +95,16 @@ static int config_ok(const mvt_tracker_config_t *c)
            c->rules.seen_min_views >= 1 && c->rules.seen_max_std_m >= MVT_R(0.0) && isfinite(c->rules.seen_max_std_m) &&
            c->rules.confirm_window <= 32 && c->rules.confirm_hits >= 1 && c->rules.confirm_hits <= c->rules.confirm_window &&
            c->rules.tentative_max_misses >= 1 && c->rules.coast_max_s > MVT_R(0.0) && c->max_pos_std_m > MVT_R(0.0) &&
-           c->volume_margin_m >= MVT_R(0.0) && c->var_floor_m2 >= MVT_R(0.0) &&
+           c->volume.margin_m >= MVT_R(0.0) && c->var_floor_m2 >= MVT_R(0.0) &&
            c->rules.merge_width_m > MVT_R(0.0) && isfinite(c->rules.merge_width_m) && c->rules.dup_dist_m >= MVT_R(0.0) &&
            c->rules.merge_ambiguity >= MVT_R(0.0) && isfinite(c->rules.merge_ambiguity) &&
-           isfinite(c->rules.dup_dist_m) && c->exit_margin_m >= MVT_R(0.0) && isfinite(c->exit_margin_m) &&
+           isfinite(c->rules.dup_dist_m) && c->volume.exit_margin_m >= MVT_R(0.0) && isfinite(c->volume.exit_margin_m) &&
            c->rules.exit_coast_s > MVT_R(0.0) && isfinite(c->rules.exit_coast_s) &&
-           (c->rules.occlusion == 0 || c->rules.occlusion == 1) && c->body_halfwidth_m >= MVT_R(0.0) &&
-           isfinite(c->body_halfwidth_m) && c->rules.occluded_max_s > MVT_R(0.0) && isfinite(c->rules.occluded_max_s) &&
+           (c->rules.occlusion == 0 || c->rules.occlusion == 1) && c->body.halfwidth_m >= MVT_R(0.0) &&
+           isfinite(c->body.halfwidth_m) && c->rules.occluded_max_s > MVT_R(0.0) && isfinite(c->rules.occluded_max_s) &&
            c->rules.exclusion_m >= MVT_R(0.0) && isfinite(c->rules.exclusion_m) &&
            c->rules.contra_views >= 1 && c->rules.contra_max_s > MVT_R(0.0) && isfinite(c->rules.contra_max_s) &&
-           c->p_detect > MVT_R(0.0) && c->p_detect < MVT_R(1.0) &&
+           c->population.p_detect > MVT_R(0.0) && c->population.p_detect < MVT_R(1.0) &&
            c->rules.recover_s >= MVT_R(0.0) && c->rules.recover_s <= MVT_R(3600.0) &&
            (c->rules.merge == MVT_MERGE_NEITHER || c->rules.merge == MVT_MERGE_SHARE || c->rules.merge == MVT_MERGE_OFF ||
             c->rules.merge == MVT_MERGE_TOP) &&

@@ -111,7 +111,7 @@ typedef struct mvt_rules_config {
                                    updates neither; >= 0, default 4 (likelihood ratio e^2) */
     mvt_real dup_dist_m;        /* two tracks closer than this in 3D are one target: the younger
                                    is deleted; >= 0 (0: never), default 0.25 */
-    mvt_real exit_coast_s;      /* a track unseen this long within exit_margin_m of the volume's
+    mvt_real exit_coast_s;      /* a track unseen this long within volume.exit_margin_m of the volume's
                                    side walls is deleted (people leave through the sides); > 0,
                                    default 0.3 */
     int occlusion;              /* 1 (default): a confirmed track that a camera did not update
@@ -143,28 +143,33 @@ typedef struct mvt_rules_config {
                                    back (mvt_trk_recover.c); >= 0 (0: off), default 3 */
 } mvt_rules_config_t;
 
-typedef struct mvt_tracker_config {
-    mvt_filter_t filter;        /* default MVT_FILTER_PROJECTIVE */
-    mvt_pkf_lin_t lin;          /* default MVT_PKF_JACOBIAN */
-    mvt_gate_t gate;            /* default MVT_GATE_CHI2 */
-    mvt_imm_config_t motion;    /* the motion models (mvt_imm.h): default mvt_imm_config_default,
-                                   an IMM of standing, walking and manoeuvring people that needs no
-                                   tuning; mvt_imm_config_single(q) is the single constant-velocity
-                                   filter with white-acceleration density q (m^2/s^3 per axis) */
-    mvt_real gate_chi2;         /* chi-square gate, 2 dof; default 13.8 (0.1 % false rejection) */
-    mvt_paper_gate_t paper;     /* MVT_GATE_PAPER's parameters */
-    mvt_real init_vel_std_ms;   /* velocity std of a new track, m/s; default 1.0 */
-    mvt_real max_pos_std_m;     /* a track whose position std exceeds this is deleted; default 1.0 */
-    mvt_real volume_min[3];     /* tracked volume, metres (rig file) */
-    mvt_real volume_max[3];
-    mvt_real volume_margin_m;   /* births and tracks may be this far outside; default 0.5 */
-    mvt_real var_floor_m2;      /* covariance diagonal floor; default 1e-10 */
+/* The room: where people are tracked and where they leave it. */
+typedef struct mvt_volume {
+    mvt_real min[3];            /* tracked volume, metres (rig file) */
+    mvt_real max[3];
+    mvt_real margin_m;          /* births and tracks may be this far outside; default 0.5 */
     mvt_real exit_margin_m;     /* the band along the volume's side walls through which people
-                                   leave, m: the body model lets a track there walk out (exit_s),
-                                   the rules delete one unseen there for rules.exit_coast_s; >= 0,
-                                   default 0.5 */
-    mvt_real body_halfwidth_m;  /* half a person's width: a hidden head lies at least this far
-                                   inside the blob's side edges; >= 0, default 0.2 */
+                                   leave, m: the body model lets a track there walk out
+                                   (population.exit_s), the rules delete one unseen there for
+                                   rules.exit_coast_s; >= 0, default 0.5 */
+} mvt_volume_t;
+
+/* A person's body, the size prior of a head top over a body standing on the floor. */
+typedef struct mvt_body_prior {
+    mvt_real halfwidth_m;       /* half a person's width: a hidden head lies at least this far
+                                   inside the blob's side edges, and two heads closer than it are
+                                   one person's; >= 0, default 0.2 */
+    mvt_real head_height_m;     /* mean head-top height of a standing adult, m, 1..2.5; default 1.70 */
+    mvt_real head_height_sd_m;  /* its spread over people and postures a newcomer has, m, 0.02..0.5;
+                                   default 0.15 */
+    mvt_real foot_sd_m;         /* a blob's bottom-centre (the feet) about the point under the head
+                                   top, horizontal standard deviation, m (stride, lean), 0.01..0.5;
+                                   default 0.12 */
+} mvt_body_prior_t;
+
+/* The people as the model counts them: how often a camera reports one, how many false blobs it
+ * sends, how often people come and go, and how sure a track must be to be shown or ended. */
+typedef struct mvt_population {
     mvt_real p_detect;          /* MVT_LIFECYCLE_BODY: the prior of each camera's detection
                                    probability, which it learns online (MVT_BODY_PD_S). Rules:
                                    probability that a camera whose picture holds a person's head
@@ -180,28 +185,42 @@ typedef struct mvt_tracker_config {
                                    same way. Association weighs it too: a track's miss costs
                                    2 ln(p_detect / (1 - p_detect)) - 2 ln(2 pi lambda) against a
                                    detection's d^2 + ln |S| (mvt_trk_assoc.c) */
-    mvt_lifecycle_t lifecycle;  /* default MVT_LIFECYCLE_BODY */
-    mvt_rules_config_t rules;   /* MVT_LIFECYCLE_RULES only */
-    /* MVT_LIFECYCLE_BODY's own physical parameters (docs/tracking.md, "One model of a person"); it
-     * also reads p_detect, body_halfwidth_m, gate_chi2, motion, init_vel_std_ms, volume_*,
-     * volume_margin_m, exit_margin_m, max_pos_std_m and var_floor_m2 above. */
-    mvt_real head_height_m;     /* mean head-top height of a standing adult, m, 1..2.5; default 1.70 */
-    mvt_real head_height_sd_m;  /* its spread over people and postures a newcomer has, m, 0.02..0.5;
-                                   default 0.15 */
-    mvt_real foot_sd_m;         /* a blob's bottom-centre (the feet) about the point under the head
-                                   top, horizontal standard deviation, m (stride, lean), 0.01..0.5;
-                                   default 0.12 */
-    mvt_real birth_per_s;       /* people entering the tracked volume per second, on average,
+    mvt_real clutter_per_frame; /* MVT_LIFECYCLE_BODY: a camera's false blobs per frame before it
+                                   has been watched (then learnt online over MVT_BODY_CLUTTER_S),
+                                   0.01..100; default 0.5 */
+    mvt_real birth_per_s;       /* ... people entering the tracked volume per second, on average,
                                    1e-4..10; default 0.1 */
-    mvt_real stay_s;            /* mean time a person stays in the volume, s, > 0; default 600 */
-    mvt_real exit_s;            /* mean time a person within exit_margin_m of a side wall takes to
-                                   walk out, s, > 0; default 2 */
-    mvt_real clutter_per_frame; /* a camera's false blobs per frame before it has been watched
-                                   (then learnt online over MVT_BODY_CLUTTER_S), 0.01..100;
-                                   default 0.5 */
-    mvt_real exist_confirm;     /* probability of existence that confirms a track, (0.5, 1);
+    mvt_real stay_s;            /* ... mean time a person stays in the volume, s, > 0; default 600 */
+    mvt_real exit_s;            /* ... mean time a person within volume.exit_margin_m of a side
+                                   wall takes to walk out, s, > 0; default 2 */
+    mvt_real exist_confirm;     /* ... probability of existence that confirms a track, (0.5, 1);
                                    default 0.9 */
     mvt_real exist_delete;      /* ... under which a track is deleted, (0, 0.5); default 0.01 */
+} mvt_population_t;
+
+typedef struct mvt_tracker_config {
+    /* mode selectors */
+    mvt_filter_t filter;        /* default MVT_FILTER_PROJECTIVE */
+    mvt_pkf_lin_t lin;          /* default MVT_PKF_JACOBIAN */
+    mvt_gate_t gate;            /* default MVT_GATE_CHI2 */
+    mvt_lifecycle_t lifecycle;  /* default MVT_LIFECYCLE_BODY */
+    /* the physical model */
+    mvt_imm_config_t motion;    /* the motion models (mvt_imm.h): default mvt_imm_config_default,
+                                   an IMM of standing, walking and manoeuvring people that needs no
+                                   tuning; mvt_imm_config_single(q) is the single constant-velocity
+                                   filter with white-acceleration density q (m^2/s^3 per axis) */
+    mvt_volume_t volume;        /* the room */
+    mvt_body_prior_t body;      /* a person's size */
+    mvt_population_t population; /* detection, clutter, births, stays, exits, belief */
+    mvt_real init_vel_std_ms;   /* velocity std of a new track, m/s; default 1.0 (also how far a
+                                   person who was lost may have walked) */
+    /* numerics */
+    mvt_real gate_chi2;         /* chi-square gate, 2 dof; default 13.8 (0.1 % false rejection) */
+    mvt_real max_pos_std_m;     /* a track whose position std exceeds this is deleted; default 1.0 */
+    mvt_real var_floor_m2;      /* covariance diagonal floor; default 1e-10 */
+    /* other lifecycles and gates */
+    mvt_paper_gate_t paper;     /* MVT_GATE_PAPER's parameters */
+    mvt_rules_config_t rules;   /* MVT_LIFECYCLE_RULES only */
 } mvt_tracker_config_t;
 
 /* One detection as the core needs it (raw distorted pixels). */
@@ -293,7 +312,7 @@ typedef struct mvt_counters {
                                          in 3D (mvt_trk_reacquire) */
     uint64_t identities_recovered;    /* tracks confirmed with the identity of a track lost within
                                          recover_s (identity recovery) */
-    uint64_t deleted_unlikely;        /* MVT_LIFECYCLE_BODY: existence fell under exist_delete */
+    uint64_t deleted_unlikely;        /* MVT_LIFECYCLE_BODY: existence fell under population.exist_delete */
     uint64_t fragments;               /* MVT_LIFECYCLE_BODY: blobs explained as a fragment of a
                                          tracked body (no update, no birth) */
     uint64_t foot_updates;            /* MVT_LIFECYCLE_BODY: updates with a blob's visible feet */
@@ -370,7 +389,7 @@ typedef struct mvt_track {
     mvt_imm_view_t view[MVT_MAX_CAMERAS]; /* per camera: was its last detection displaced, and by
                                              how much (mvt_imm_update_view) */
     mvt_real exist_lo;          /* MVT_LIFECYCLE_BODY: log odds that its person is in the volume */
-    int32_t dormant;            /* MVT_LIFECYCLE_BODY: 1 when its existence fell under exist_delete
+    int32_t dormant;            /* MVT_LIFECYCLE_BODY: 1 when its existence fell under population.exist_delete
                                    after it was shown: its label waits MVT_BODY_DORMANT_S for the
                                    person to be found again (mvt_body_birth.c), unseen and unshown */
     int32_t was_shown;          /* MVT_LIFECYCLE_BODY: 1 once it has been shown confirmed */

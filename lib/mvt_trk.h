@@ -260,7 +260,7 @@ mvt_err_t mvt_trk_repair(mvt_tracker_t *self, mvt_track_t *tr);
 /* The estimate tr->s predicted to utime_us into out, the track unchanged. */
 void mvt_trk_predicted(const mvt_tracker_t *self, const mvt_track_t *tr, int64_t utime_us, mvt_cv_state_t *out);
 
-/* The track's position is within the volume extended by volume_margin_m. */
+/* The track's position is within the volume extended by volume.margin_m. */
 int mvt_trk_inside_volume(const mvt_tracker_config_t *c, const mvt_real x[3]);
 
 #endif /* MVT_TRK_H */

@@ -63,7 +63,7 @@ static mvt_real miss_base(const mvt_tracker_t *self, int k)
     if (c->gate == MVT_GATE_PAPER) {
         return c->paper.delta;
     }
-    const mvt_real pd = c->p_detect;
+    const mvt_real pd = c->population.p_detect;
     const mvt_real g = MVT_R(2.0) * (MVT_LOG(pd / (MVT_R(1.0) - pd)) - MVT_LOG(MVT_R(6.2831853) * self->ev_clutter[k]));
     return g > MVT_R(0.0) ? g : MVT_R(0.0);
 }
@@ -269,7 +269,7 @@ static int hypothesise(mvt_tracker_t *self, const mvt_view_t *view, int k, const
              * p_detect at the Gaussian's place, or missed) against clutter spread uniformly at
              * this view's density (the integrated PDA's existence update): on average 1 for a
              * flood's random detections, far more for a person's; 1 - p_detect for an empty gate */
-            const mvt_real pd = c->p_detect;
+            const mvt_real pd = c->population.p_detect;
             self->ev_llr[t] += MVT_LOG(MVT_R(1.0) - pd + pd * g / self->ev_clutter[k]);
         }
     }

@@ -28,7 +28,7 @@
 static int near_side_wall(const mvt_tracker_config_t *c, const mvt_real x[3])
 {
     for (int i = 0; i < 2; i++) {
-        if (x[i] < c->volume_min[i] + c->exit_margin_m || x[i] > c->volume_max[i] - c->exit_margin_m) {
+        if (x[i] < c->volume.min[i] + c->volume.exit_margin_m || x[i] > c->volume.max[i] - c->volume.exit_margin_m) {
             return 1;
         }
     }

@@ -18,7 +18,7 @@
 int mvt_trk_inside_volume(const mvt_tracker_config_t *c, const mvt_real x[3])
 {
     for (int i = 0; i < 3; i++) {
-        if (!(x[i] >= c->volume_min[i] - c->volume_margin_m) || !(x[i] <= c->volume_max[i] + c->volume_margin_m)) {
+        if (!(x[i] >= c->volume.min[i] - c->volume.margin_m) || !(x[i] <= c->volume.max[i] + c->volume.margin_m)) {
             return 0;
         }
     }

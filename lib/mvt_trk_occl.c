@@ -18,7 +18,7 @@
  * Where camera k sent its foreground mask, the mask must also hold something near the predicted
  * head: a hidden head is foreground (merged into another's silhouette, or behind a body), and the
  * background a box spans beside and between its people hides nobody (docs/tracking.md, "Hidden
- * only in foreground"). The head then lies in the box's column band, at least body_halfwidth_m
+ * only in foreground"). The head then lies in the box's column band, at least body.halfwidth_m
  * (seen at the track's depth) inside the side edges, widened by the detection's pixel sigma. The
  * likeliest blob under a uniform position in the band (the prior mass of the band over its width)
  * constrains the track: its predicted column is
@@ -142,7 +142,7 @@ static mvt_real clamp_q(mvt_real q)
 
 void mvt_trk_evidence_weights(mvt_tracker_t *self, const mvt_frame_t *frame)
 {
-    const mvt_real pd = self->cfg.p_detect;
+    const mvt_real pd = self->cfg.population.p_detect;
     for (int k = 0; k < self->num_cameras; k++) {
         const mvt_view_t *view = &frame->views[k];
         const mvt_camera_t *cam = &self->cams[k];
@@ -183,7 +183,7 @@ mvt_real mvt_trk_density(const mvt_pkf_innov_t *in)
 
 mvt_real mvt_trk_detected_llr(const mvt_tracker_t *self, int k, const mvt_pkf_innov_t *in)
 {
-    const mvt_real pd = self->cfg.p_detect;
+    const mvt_real pd = self->cfg.population.p_detect;
     return MVT_LOG(MVT_R(1.0) - pd + pd * mvt_trk_density(in) / self->ev_clutter[k]);
 }
 
@@ -243,11 +243,11 @@ static mvt_real empty_slack(const mvt_camera_t *cam, const mvt_pkf_pred_t *p)
     return MVT_R(3.0) * cam->sigma_px + MVT_R(2.0) * MVT_SQRT(s2) + MVT_R(8.0);
 }
 
-/* How much a silhouette's half width varies about body_halfwidth_m (arms, clothes, pose), m. */
+/* How much a silhouette's half width varies about body.halfwidth_m (arms, clothes, pose), m. */
 #define OCCL_BODY_SD_M MVT_R(0.05)
 
 /* A person's silhouette in camera k as the tracker predicts it, raw pixels: the column from the
- * head (uv) down to the feet (the ground point below it) widened by body_halfwidth_m at the head's
+ * head (uv) down to the feet (the ground point below it) widened by body.halfwidth_m at the head's
  * depth. 0 when the feet do not project. */
 static int silhouette(const mvt_tracker_t *self, int k, const mvt_real x[3], const mvt_real head[2], mvt_real depth,
                       mvt_real sil[4])
@@ -258,7 +258,7 @@ static int silhouette(const mvt_tracker_t *self, int k, const mvt_real x[3], con
     if (mvt_cam_project(cam, ground, foot, NULL) != MVT_OK || !(depth > MVT_R(0.0))) {
         return 0;
     }
-    const mvt_real w = cam->fx * self->cfg.body_halfwidth_m / depth;
+    const mvt_real w = cam->fx * self->cfg.body.halfwidth_m / depth;
     sil[0] = (head[0] < foot[0] ? head[0] : foot[0]) - w;
     sil[1] = head[1];
     sil[2] = (head[0] > foot[0] ? head[0] : foot[0]) + w;
@@ -431,7 +431,7 @@ void mvt_trk_occlusion(mvt_tracker_t *self, const mvt_view_t *view, int k, const
             p = &raw;
         }
         const mvt_real su = MVT_SQRT(p->hph[0]), sv = MVT_SQRT(p->hph[2]);
-        const mvt_real half_px = cam->fx * c->body_halfwidth_m / p->depth_m;
+        const mvt_real half_px = cam->fx * c->body.halfwidth_m / p->depth_m;
         /* a person hidden in a blob has foreground at their head's place (their own head, merged
          * into another's silhouette, or the body in front of it): where the view sent its mask, a
          * box's background is no hiding place. The same answer says below whether the place is
@@ -483,7 +483,7 @@ void mvt_trk_occlusion(mvt_tracker_t *self, const mvt_view_t *view, int k, const
             const int covered = masked ? fg_near : place_covered(self, view, k, p->h, slack);
             /* existence (mvt_trk_existence): with none, the person was missed, if in the picture */
             if (!covered && su > MVT_R(0.0) && sv > MVT_R(0.0)) {
-                self->ev_llr[t] += MVT_LOG(MVT_R(1.0) - c->p_detect * in_picture(cam, p->h, su, sv));
+                self->ev_llr[t] += MVT_LOG(MVT_R(1.0) - c->population.p_detect * in_picture(cam, p->h, su, sv));
             }
             /* in the picture, not seen and not hidden in a blob another track took: this view
              * contradicts the track (unless the detector missed the whole blob) */

@@ -112,8 +112,8 @@ void mvt_trk_confirm(mvt_tracker_t *self, mvt_track_t *tr)
  * took the identity (docs/tracking.md, "A new person, or a lost one?"). */
 static int likelier_than_new(const mvt_tracker_config_t *c, mvt_real d2, mvt_real det)
 {
-    const mvt_real vol = (c->volume_max[0] - c->volume_min[0]) * (c->volume_max[1] - c->volume_min[1]) *
-                         (c->volume_max[2] - c->volume_min[2]);
+    const mvt_real vol = (c->volume.max[0] - c->volume.min[0]) * (c->volume.max[1] - c->volume.min[1]) *
+                         (c->volume.max[2] - c->volume.min[2]);
     if (!(det > MVT_R(0.0)) || !(vol > MVT_R(0.0))) {
         return 0;
     }

@@ -20,8 +20,8 @@ static void init_body(mvt_camera_t cams[5], int n_cams)
     mvt_tracker_config_t cfg;
     mvt_tracker_config_default(&cfg);
     cfg.lifecycle = MVT_LIFECYCLE_BODY;
-    cfg.volume_min[0] = 0; cfg.volume_min[1] = 0; cfg.volume_min[2] = 0;
-    cfg.volume_max[0] = 6; cfg.volume_max[1] = 5; cfg.volume_max[2] = 2.5f;
+    cfg.volume.min[0] = 0; cfg.volume.min[1] = 0; cfg.volume.min[2] = 0;
+    cfg.volume.max[0] = 6; cfg.volume.max[1] = 5; cfg.volume.max[2] = 2.5f;
     assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, n_cams), MVT_OK);
 }
 
@@ -204,13 +204,13 @@ static void test_body_config_out_of_range_rejected(void **state)
     cfg.lifecycle = MVT_LIFECYCLE_BODY;
     assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 5), MVT_OK);
     mvt_tracker_config_t bad = cfg;
-    bad.head_height_m = 0.5f;
+    bad.body.head_height_m = 0.5f;
     assert_int_equal(mvt_tracker_init(&g_tracker, &bad, cams, 5), MVT_ERR_INVALID);
     bad = cfg;
-    bad.exist_delete = 0.6f;
+    bad.population.exist_delete = 0.6f;
     assert_int_equal(mvt_tracker_init(&g_tracker, &bad, cams, 5), MVT_ERR_INVALID);
     bad = cfg;
-    bad.birth_per_s = 0.0f;
+    bad.population.birth_per_s = 0.0f;
     assert_int_equal(mvt_tracker_init(&g_tracker, &bad, cams, 5), MVT_ERR_INVALID);
     bad = cfg;
     bad.lifecycle = (mvt_lifecycle_t)7;

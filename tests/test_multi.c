@@ -30,8 +30,8 @@ static void init(void)
     mvt_tracker_config_t cfg;
     mvt_tracker_config_default(&cfg);
     cfg.lifecycle = g_lifecycle;
-    cfg.volume_min[0] = 0; cfg.volume_min[1] = 0; cfg.volume_min[2] = 0;
-    cfg.volume_max[0] = 6; cfg.volume_max[1] = 5; cfg.volume_max[2] = 2.5f;
+    cfg.volume.min[0] = 0; cfg.volume.min[1] = 0; cfg.volume.min[2] = 0;
+    cfg.volume.max[0] = 6; cfg.volume.max[1] = 5; cfg.volume.max[2] = 2.5f;
     assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, g_cams, 5), MVT_OK);
 }
 
@@ -1562,8 +1562,8 @@ static void test_mvt_tracker_step_person_where_one_camera_reaches_kept(void **st
     mvt_tracker_config_t cfg;
     mvt_tracker_config_default(&cfg);
     cfg.lifecycle = g_lifecycle;
-    cfg.volume_min[0] = 0; cfg.volume_min[1] = 0; cfg.volume_min[2] = 0;
-    cfg.volume_max[0] = 6; cfg.volume_max[1] = 5; cfg.volume_max[2] = 2.5f;
+    cfg.volume.min[0] = 0; cfg.volume.min[1] = 0; cfg.volume.min[2] = 0;
+    cfg.volume.max[0] = 6; cfg.volume.max[1] = 5; cfg.volume.max[2] = 2.5f;
     assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, g_two, 2), MVT_OK);
     test_rng_t rng = {23};
     int64_t t = 1000000;

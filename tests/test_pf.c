@@ -618,8 +618,8 @@ static double run_two(uint64_t seed, int frames, int column, mvt_output_t *last,
     cfg.column = column;
     *head_in = 0;
     cfg.num_particles = 400;
-    for (int i = 0; i < 3; i++) cfg.det.volume_min[i] = 0;
-    cfg.det.volume_max[0] = 6; cfg.det.volume_max[1] = 5; cfg.det.volume_max[2] = 2.5;
+    for (int i = 0; i < 3; i++) cfg.det.volume.min[i] = 0;
+    cfg.det.volume.max[0] = 6; cfg.det.volume.max[1] = 5; cfg.det.volume.max[2] = 2.5;
     assert_int_equal(mvt_pft_init(&g_pft, &cfg, g_cams, 5), MVT_OK);
     double worst = 0;
     for (int f = 0; f < frames; f++) {
@@ -711,8 +711,8 @@ static void init_room_pft(int particles, int share, mvt_real recover_s)
     cfg.num_particles = particles;
     cfg.share_pixels = share;
     cfg.recover_s = recover_s;
-    for (int i = 0; i < 3; i++) cfg.det.volume_min[i] = 0;
-    cfg.det.volume_max[0] = 6; cfg.det.volume_max[1] = 5; cfg.det.volume_max[2] = 2.5;
+    for (int i = 0; i < 3; i++) cfg.det.volume.min[i] = 0;
+    cfg.det.volume.max[0] = 6; cfg.det.volume.max[1] = 5; cfg.det.volume.max[2] = 2.5;
     assert_int_equal(mvt_pft_init(&g_pft, &cfg, g_cams, 5), MVT_OK);
 }
 
@@ -879,8 +879,8 @@ static void test_pft_resume_continues_bit_for_bit_and_refuses_bad_state(void **s
     mvt_pft_config_t cfg;
     mvt_pft_config_default(&cfg);
     cfg.num_particles = 200;
-    for (int i = 0; i < 3; i++) cfg.det.volume_min[i] = 0;
-    cfg.det.volume_max[0] = 6; cfg.det.volume_max[1] = 5; cfg.det.volume_max[2] = 2.5;
+    for (int i = 0; i < 3; i++) cfg.det.volume.min[i] = 0;
+    cfg.det.volume.max[0] = 6; cfg.det.volume.max[1] = 5; cfg.det.volume.max[2] = 2.5;
     assert_int_equal(mvt_pft_init(&g_pft, &cfg, g_cams, 5), MVT_OK);
     double heads[2][3];
     for (int f = 0; f < 30; f++) {

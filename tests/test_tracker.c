@@ -46,8 +46,8 @@ static void init_tracker(mvt_camera_t cams[5], mvt_filter_t f, mvt_pkf_lin_t lin
     cfg.lifecycle = g_lifecycle;
     cfg.filter = f;
     cfg.lin = lin;
-    cfg.volume_min[0] = 0; cfg.volume_min[1] = 0; cfg.volume_min[2] = 0;
-    cfg.volume_max[0] = 6; cfg.volume_max[1] = 5; cfg.volume_max[2] = 2.5f;
+    cfg.volume.min[0] = 0; cfg.volume.min[1] = 0; cfg.volume.min[2] = 0;
+    cfg.volume.max[0] = 6; cfg.volume.max[1] = 5; cfg.volume.max[2] = 2.5f;
     assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 5), MVT_OK);
 }
 
@@ -538,14 +538,14 @@ static void test_mvt_tracker_init_bad_config_rejected(void **state)
     cfg.rules.confirm_hits = 9;
     assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 5), MVT_ERR_INVALID);
     mvt_tracker_config_default(&cfg);
-    cfg.volume_max[2] = cfg.volume_min[2];
+    cfg.volume.max[2] = cfg.volume.min[2];
     assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 5), MVT_ERR_INVALID);
     /* occlusion, exclusion and contradiction settings */
     mvt_tracker_config_default(&cfg);
     cfg.rules.occlusion = 2;
     assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 5), MVT_ERR_INVALID);
     mvt_tracker_config_default(&cfg);
-    cfg.body_halfwidth_m = NAN;
+    cfg.body.halfwidth_m = NAN;
     assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 5), MVT_ERR_INVALID);
     mvt_tracker_config_default(&cfg);
     cfg.rules.exclusion_m = -0.1f;

@@ -219,8 +219,8 @@ static void test_tracker(void)
     const int f0 = g_fail;
     mvt_tracker_config_t cfg;
     mvt_tracker_config_default(&cfg);
-    cfg.volume_min[0] = 0.0f; cfg.volume_min[1] = 0.0f; cfg.volume_min[2] = 0.0f;
-    cfg.volume_max[0] = 6.0f; cfg.volume_max[1] = 5.0f; cfg.volume_max[2] = 2.5f;
+    cfg.volume.min[0] = 0.0f; cfg.volume.min[1] = 0.0f; cfg.volume.min[2] = 0.0f;
+    cfg.volume.max[0] = 6.0f; cfg.volume.max[1] = 5.0f; cfg.volume.max[2] = 2.5f;
     check(mvt_tracker_init(&g_tracker, &cfg, g_cams, MCU_NCAM) == MVT_OK, "tracker init", 0, 0);
     int32_t id = 0;
     float se = 0.0f, worst = 0.0f;

@@ -97,6 +97,7 @@ def main(argv=None) -> int:
     ap.add_argument("--drop-every", type=float, default=20.0, help="a camera goes silent this often, s (default 20)")
     ap.add_argument("--drop-for", type=float, default=4.0, help="... for this long, s (default 4)")
     ap.add_argument("--mode", default="pkf", help="daemon --mode (default pkf)")
+    ap.add_argument("--rt-priority", type=int, metavar="PRIO", help="daemon --rt-priority PRIO (SCHED_FIFO; needs root)")
     ap.add_argument("--port", type=int, default=7600 + os.getpid() % 300, help="private multicast port")
     ap.add_argument("--out", type=Path, default=REPO / "out" / "latency")
     ap.add_argument("--seed", type=int, default=1)
@@ -139,7 +140,8 @@ def main(argv=None) -> int:
     rng = np.random.default_rng(a.seed)
     people = walkers(rng, a.people, frames, period, rig.volume_min, rig.volume_max)
 
-    daemon = subprocess.Popen([str(DAEMON), "--rig", str(rig_path), "--in", url, "--mode", a.mode],
+    daemon = subprocess.Popen([str(DAEMON), "--rig", str(rig_path), "--in", url, "--mode", a.mode] +
+                              (["--rt-priority", str(a.rt_priority)] if a.rt_priority else []),
                               stderr=subprocess.PIPE, text=True)
     pub = lcm.LCM(url)
     sub = lcm.LCM(url)
@@ -357,7 +359,7 @@ def main(argv=None) -> int:
         "daemon_status_latency_ms_p99_last": statuses[-1].latency_ms_p99 if statuses else None,
         "daemon_status_went_down": [int(c.went_down) for c in statuses[-1].cameras] if statuses else None,
         "daemon_status_came_back": [int(c.came_back) for c in statuses[-1].cameras] if statuses else None,
-        "seconds": a.seconds, "people": a.people, "mode": a.mode, "view_open": bool(a.view),
+        "seconds": a.seconds, "people": a.people, "mode": a.mode, "rt_priority": a.rt_priority, "view_open": bool(a.view),
         "view_rate_hz": a.view_rate if a.view else None,
         "score_from_s": a.score_from_s,
         "mota": None if mot is None else mot.mota, "id_switches": None if mot is None else mot.id_switches,
