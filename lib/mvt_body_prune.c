@@ -11,7 +11,9 @@
  * max_pos_std_m (nobody has seen it for long: it is nowhere in particular), or when it leaves the
  * volume widened by volume.margin_m.
  * Bodies do not overlap: a track no camera placed this frame is kept a body's width from those the
- * cameras placed and from likelier unplaced ones (a truncation along their horizontal separation).
+ * cameras placed and from likelier unplaced ones (a truncation along their horizontal separation;
+ * between two tracks both shown, an estimate the truncation finds wholly inside the other body is
+ * widened by the overlap first).
  * Two heads closer than body.halfwidth_m horizontally, one of them placed this frame, are one person (two bodies cannot stand
  * inside each other): the track with the likelier estimate (the higher existence) goes on with its
  * own identity, or with the other's when only the other was shown confirmed.
@@ -105,7 +107,17 @@ void mvt_body_prune(mvt_tracker_t *self)
             const mvt_real H[3] = {dx / dist, dy / dist, MVT_R(0.0)};
             const mvt_real var_b = H[0] * H[0] * tb->s.P[0] + MVT_R(2.0) * H[0] * H[1] * tb->s.P[1] + H[1] * H[1] * tb->s.P[7];
             const mvt_real base = H[0] * tb->s.x[0] + H[1] * tb->s.x[1];
-            if (mvt_trk_truncate_ground(self, ta, H, base + dist, var_b, base + width, base + MVT_R(1e3)) == MVT_OK) {
+            mvt_err_t err = mvt_trk_truncate_ground(self, ta, H, base + dist, var_b, base + width, base + MVT_R(1e3));
+            if (err == MVT_ERR_NUMERIC && ta->was_shown && tb->was_shown) {
+                /* two people both shown, the unplaced one's estimate inside the other's body with
+                 * next to no mass outside it: its estimate is wrong by about the overlap (it has
+                 * coasted on a velocity nobody measured), not the person gone; its horizontal
+                 * spread along the separation widens by the overlap, then the bodies part */
+                const mvt_real over = width - dist;
+                mvt_trk_widen_ground(self, ta, H, over * over);
+                err = mvt_trk_truncate_ground(self, ta, H, base + dist, var_b, base + width, base + MVT_R(1e3));
+            }
+            if (err == MVT_OK) {
                 self->counters.exclusion_updates++;
             }
         }

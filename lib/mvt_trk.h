@@ -256,6 +256,10 @@ mvt_err_t mvt_trk_truncate(mvt_tracker_t *self, mvt_track_t *tr, const mvt_real 
                            mvt_real hi);
 mvt_err_t mvt_trk_truncate_ground(mvt_tracker_t *self, mvt_track_t *tr, const mvt_real H[3], mvt_real value,
                                   mvt_real extra_var, mvt_real lo, mvt_real hi);
+
+/* Adds var (m^2) to the track's horizontal position variance along the unit vector H (H[2] = 0),
+ * in every motion model: an estimate known to be wrong by about sqrt(var) there. */
+void mvt_trk_widen_ground(mvt_tracker_t *self, mvt_track_t *tr, const mvt_real H[3], mvt_real var);
 mvt_err_t mvt_trk_repair(mvt_tracker_t *self, mvt_track_t *tr);
 /* The estimate tr->s predicted to utime_us into out, the track unchanged. */
 void mvt_trk_predicted(const mvt_tracker_t *self, const mvt_track_t *tr, int64_t utime_us, mvt_cv_state_t *out);
