@@ -101,7 +101,7 @@ static void clock_from_tracks(mvtd_t *d, const mvt_frame_t *frame)
                 udot[r] = (double)(jac[3 * r] * o->vel_ms[0] + jac[3 * r + 1] * o->vel_ms[1] + jac[3 * r + 2] * o->vel_ms[2]);
             }
             const double gate = 30.0 + 0.15 * hypot(udot[0], udot[1]);
-            double best = INFINITY, second = INFINITY;
+            double best = HUGE_VAL, second = HUGE_VAL;
             int bi = -1;
             for (int j = 0; j < v->num_detections; j++) {
                 const double e = hypot((double)(v->det[j].u - uv[i][0]), (double)(v->det[j].v - uv[i][1]));
