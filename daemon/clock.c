@@ -87,12 +87,11 @@ mvtd_clock_verdict_t mvtd_clock_observe(mvtd_clock_t *c, int cam, int64_t utime,
     return MVTD_CLOCK_ACCEPT;
 }
 
-void mvtd_clock_motion_sample(mvtd_clock_t *c, int cam, const double r[2], const double udot_px_s[2], int n_cameras)
+void mvtd_clock_motion_sample(mvtd_clock_t *c, int cam, const double r[2], const double udot[2])
 {
-    if (cam < 0 || cam >= c->num_cameras || n_cameras < 2) {
-        return; /* a track one camera updates follows that camera: its residual says nothing of time */
+    if (cam < 0 || cam >= c->num_cameras) {
+        return;
     }
-    const double *udot = udot_px_s;
     c->m_n[cam] += 1.0;
     for (int a = 0; a < 2; a++) {
         c->m_u[cam][a] += udot[a];

@@ -95,10 +95,9 @@ mvtd_clock_verdict_t mvtd_clock_observe(mvtd_clock_t *c, int cam, int64_t utime,
                                         int64_t half_period_us, int64_t *utime_out);
 
 /* One moving track's residual in camera cam: r (px) = the detection it took minus its head
- * projected at the view's time, udot (px/s) its head's image velocity there, n_cameras the
- * cameras that updated the track this frame (cam among them; one: the track follows that camera,
- * the sample is not taken). */
-void mvtd_clock_motion_sample(mvtd_clock_t *c, int cam, const double r[2], const double udot[2], int n_cameras);
+ * projected at the view's time, udot (px/s) its head's image velocity there. The track must not
+ * follow this camera (other cameras placed it), or its residual says nothing of time. */
+void mvtd_clock_motion_sample(mvtd_clock_t *c, int cam, const double r[2], const double udot[2]);
 
 /* After a frame set's samples (frame time utime_us, assembler time): forgets over
  * MVTD_CLOCK_MOTION_TAU_S and updates each camera's lag estimate. */

@@ -313,7 +313,7 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
         {0, 0, 0, 0}};
     int opt;
     optind = 1; /* callable more than once (tests, fuzzer) */
-    long particles = MVT_MAX_PARTICLES, seed = 1, publish_particles = 0, realtime = 0;
+    long particles = MVT_MAX_PARTICLES, seed = 1, publish_particles = 0, rt_priority = 0;
     double exclusion_m = -1.0; /* mode-dependent default */
     double recover_s = -1.0;   /* the library's default */
     double persist_s = -1.0;   /* the library's default */
@@ -370,7 +370,7 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
             }
             break;
         case 'F':
-            if (option_int("--rt-priority", optarg, 1, 99, &realtime) != 0) {
+            if (option_int("--rt-priority", optarg, 1, 99, &rt_priority) != 0) {
                 return 2;
             }
             break;
@@ -510,16 +510,16 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
         fprintf(stderr, "mvtrackd: invalid tracker configuration\n");
         return 2;
     }
-    if (realtime > 0) {
+    if (rt_priority > 0) {
         /* the frame sets are handled before anything else on the machine wants a core: a browser
          * or a detector beside the daemon cannot delay them (the checkpoint writer goes back to
          * normal scheduling, checkpoint.c) */
-        const struct sched_param sp = {.sched_priority = (int)realtime};
+        const struct sched_param sp = {.sched_priority = (int)rt_priority};
         if (sched_setscheduler(0, SCHED_FIFO, &sp) != 0) {
             fprintf(stderr,
                     "mvtrackd: --rt-priority %ld: %s (needs root or CAP_SYS_NICE; or let systemd set "
                     "CPUSchedulingPolicy=fifo)\n",
-                    realtime, strerror(errno));
+                    rt_priority, strerror(errno));
             return 2;
         }
     }

@@ -73,14 +73,18 @@ static void clock_from_tracks(mvtd_t *d, const mvt_frame_t *frame)
         const mvt_camera_t *cam = &d->trk->cams[k];
         const double dt = (double)(v->utime_us - out->utime_us) * 1e-6;
         mvt_real uv[MVT_MAX_TARGETS][2];
+        double udot[MVT_MAX_TARGETS][2]; /* the head's image velocity, px/s */
         int seen[MVT_MAX_TARGETS];
         for (int i = 0; i < out->num_tracks; i++) {
             const mvt_track_out_t *o = &out->tracks[i];
-            mvt_real x[3];
+            mvt_real x[3], jac[6];
             for (int a = 0; a < 3; a++) {
                 x[a] = o->pos_m[a] + o->vel_ms[a] * (mvt_real)dt;
             }
-            seen[i] = mvt_cam_project(cam, x, uv[i], NULL) == MVT_OK;
+            seen[i] = mvt_cam_project(cam, x, uv[i], jac) == MVT_OK;
+            for (int r = 0; r < 2 && seen[i]; r++) {
+                udot[i][r] = (double)(jac[3 * r] * o->vel_ms[0] + jac[3 * r + 1] * o->vel_ms[1] + jac[3 * r + 2] * o->vel_ms[2]);
+            }
         }
         for (int i = 0; i < out->num_tracks; i++) {
             const mvt_track_out_t *o = &out->tracks[i];
@@ -89,18 +93,7 @@ static void clock_from_tracks(mvtd_t *d, const mvt_frame_t *frame)
             if (!seen[i] || o->status != MVT_TRACK_CONFIRMED || others < 2 || speed < 0.3) {
                 continue;
             }
-            mvt_real x[3], u1[2], jac[6];
-            for (int a = 0; a < 3; a++) {
-                x[a] = o->pos_m[a] + o->vel_ms[a] * (mvt_real)dt;
-            }
-            if (mvt_cam_project(cam, x, u1, jac) != MVT_OK) {
-                continue;
-            }
-            double udot[2];
-            for (int r = 0; r < 2; r++) {
-                udot[r] = (double)(jac[3 * r] * o->vel_ms[0] + jac[3 * r + 1] * o->vel_ms[1] + jac[3 * r + 2] * o->vel_ms[2]);
-            }
-            const double gate = 30.0 + 0.15 * hypot(udot[0], udot[1]);
+            const double gate = 30.0 + 0.15 * hypot(udot[i][0], udot[i][1]);
             double best = HUGE_VAL, second = HUGE_VAL;
             int bi = -1;
             for (int j = 0; j < v->num_detections; j++) {
@@ -121,7 +114,7 @@ static void clock_from_tracks(mvtd_t *d, const mvt_frame_t *frame)
             }
             if (alone) {
                 const double r[2] = {(double)(v->det[bi].u - uv[i][0]), (double)(v->det[bi].v - uv[i][1])};
-                mvtd_clock_motion_sample(&d->clock, k, r, udot, others + 1);
+                mvtd_clock_motion_sample(&d->clock, k, r, udot[i]);
             }
         }
     }

@@ -134,16 +134,16 @@ mvt_err_t mvt_trk_truncate_ground(mvt_tracker_t *self, mvt_track_t *tr, const mv
 
 void mvt_trk_widen_ground(mvt_tracker_t *self, mvt_track_t *tr, const mvt_real H[3], mvt_real var)
 {
-    const int n = single(self) ? 1 : self->cfg.motion.n;
-    for (int j = 0; j < n; j++) {
-        mvt_cv_state_t *st = single(self) ? &tr->s : &tr->imm.m[j];
+    const int one = single(self);
+    for (int j = 0; j < (one ? 1 : self->cfg.motion.n); j++) {
+        mvt_cv_state_t *st = one ? &tr->s : &tr->imm.m[j];
         for (int a = 0; a < 2; a++) {
             for (int b = 0; b < 2; b++) {
                 st->P[a * 6 + b] += var * H[a] * H[b];
             }
         }
     }
-    if (!single(self)) {
+    if (!one) {
         mvt_imm_combine(&tr->imm, &self->cfg.motion, &tr->s);
     }
 }

@@ -157,7 +157,7 @@ static void slow_detector(mvtd_clock_t *c, int64_t delay_us, int seconds)
                 const double ud[2] = {speed * cos(dir), speed * sin(dir)};
                 const double r[2] = {1.0 - (lag_s[k] - mean) * ud[0] + 2.0 * normal(),
                                      -3.0 - (lag_s[k] - mean) * ud[1] + 2.0 * normal()};
-                mvtd_clock_motion_sample(c, k, r, ud, 5);
+                mvtd_clock_motion_sample(c, k, r, ud);
             }
         }
         mvtd_clock_motion_frame(c, capture);
