@@ -28,6 +28,7 @@ the whole run, to compare with a run without it.
 from __future__ import annotations
 
 import argparse
+import heapq
 import json
 import multiprocessing as mp
 import os
@@ -218,14 +219,14 @@ def main(argv=None) -> int:
     t_flood = time.time()
     if flooder is not None:
         flooder.start()  # a process of its own: the measuring publisher keeps its interpreter
-    # --delay: (wall time due, channel, data, frame utime); latency counts from the frame's last
-    # message sent on time
-    pending: list[tuple[float, str, bytes, int]] = []
+    # --delay: a heap of (wall time due, order sent, channel, data); latency counts from the frame's
+    # last message sent on time
+    pending: list[tuple[float, int, str, bytes]] = []
 
     def publish_due(until: float) -> None:
         """Publishes the delayed messages due by wall time until (monotonic), sleeping between them."""
         while pending and pending[0][0] <= until:
-            due, ch, data, fu_ = pending.pop(0)
+            due, _, ch, data = heapq.heappop(pending)
             wait = due - time.monotonic()
             if wait > 0:
                 time.sleep(wait)
@@ -253,10 +254,9 @@ def main(argv=None) -> int:
                              camera_frame(u + jitter + skew_us.get(int(k), 0), f, cam, dets, 2.0).encode()))
             for k, ch, data in msgs:
                 if delay_us.get(k, 0) > 0:
-                    pending.append((time.monotonic() + delay_us[k] * 1e-6, ch, data, u))
+                    heapq.heappush(pending, (time.monotonic() + delay_us[k] * 1e-6, f * ncam + k, ch, data))
                 else:
                     pub.publish(ch, data)
-            pending.sort(key=lambda p: p[0])
             sent_last[u] = time.time()
             publish_due(t0 + (f + 1) * period)
             delay = t0 + (f + 1) * period - time.monotonic()
@@ -297,8 +297,6 @@ def main(argv=None) -> int:
             i = int(np.argmin(np.abs(fu + skew - u_t)))
             if abs(fu[i] + skew - u_t) <= 10000:
                 pub_u, rx_t = tracks[u_t]
-                if fu[i] not in sent_last:
-                    continue
                 lat.append(pub_u / 1e6 - sent_last[fu[i]])
                 matched_frames.append(i)
                 matched_tracks.append(u_t)
