@@ -172,7 +172,7 @@ void mvtd_log_camera_events(mvtd_t *d)
         const int64_t mag = off < 0 ? -off : off;
         const int level = !d->clock.confident[k] || mag <= MVTD_CLOCK_WARN_US ? 0 : (mag > MVTD_CLOCK_MAX_US ? 2 : 1);
         if (level > 0 && level != d->clock.warned[k] &&
-            mvtd_log(d, MVTD_LOG_CAMERA,
+            mvtd_log(d, MVTD_LOG_CLOCK,
                      level == 2 ? "camera %s: its clock is %+.1f ms off the other cameras' (from arrival times): "
                                   "beyond %.0f ms, its frames are refused"
                                 : "camera %s: its clock is %+.1f ms off the other cameras' (from arrival times): its "
@@ -184,7 +184,7 @@ void mvtd_log_camera_events(mvtd_t *d)
         const double lag = d->clock.lag_us[k];
         if (d->clock.lag_over_since_us[k] != 0 && !d->clock.lag_warned[k] &&
             d->clock.motion_last_us - d->clock.lag_over_since_us[k] >= MVTD_CLOCK_MOTION_WARN_US &&
-            mvtd_log(d, MVTD_LOG_CAMERA,
+            mvtd_log(d, MVTD_LOG_CLOCK,
                      "camera %s: walking people in its frames are %+.0f ms (+-%.0f) %s the tracks: its detector or "
                      "network is that much %s than the others' (or its clock is off and its delay hides it), so its "
                      "frames are used that late; tracking holds, a little less precise",
