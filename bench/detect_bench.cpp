@@ -18,7 +18,7 @@
 #include <opencv2/videoio.hpp>
 
 #include "detector.hpp"
-#include "rig.h"
+#include "mvt_rig.h"
 
 namespace {
 
@@ -34,9 +34,9 @@ void print(const char *name, std::vector<double> ns)
 
 int bench_detect(const char *video, const char *rig_path)
 {
-    static mvtd_rig_t rig;
+    static mvt_rig_t rig;
     char err[256];
-    if (mvtd_rig_load(rig_path, 2.0, &rig, err, sizeof err) != 0) {
+    if (mvt_rig_load(rig_path, 2.0, &rig, err, sizeof err) != 0) {
         std::fprintf(stderr, "mvtrack-bench: %s\n", err);
         return -1;
     }

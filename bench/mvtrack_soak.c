@@ -159,7 +159,7 @@ int main(int argc, char **argv)
     for (int k = 0; k < nc; k++) {
         mvt_cam_init(&cams[k], &d->rig.params[k]);
     }
-    char channels[MVT_MAX_CAMERAS][MVTD_NAME_MAX + 16];
+    char channels[MVT_MAX_CAMERAS][MVT_RIG_NAME_MAX + 16];
     for (int k = 0; k < nc; k++) {
         snprintf(channels[k], sizeof(channels[k]), "DETECTIONS_%s", d->rig.names[k]);
     }

@@ -108,7 +108,7 @@ static int shed(mvtd_t *d, const char *channel, double now)
 {
     int slot = d->rig.num_cameras; /* channels of no rig camera share one bound */
     if (strncmp(channel, "DETECTIONS_", 11) == 0) {
-        const int k = mvtd_rig_find(&d->rig, channel + 11);
+        const int k = mvt_rig_find(&d->rig, channel + 11);
         slot = k >= 0 ? k : slot;
     }
     const int32_t bound = (int32_t)(MVTD_FLOOD_FACTOR * d->rig.frame_rate + 0.5);
@@ -148,7 +148,7 @@ void mvtd_handle(mvtd_t *d, const char *channel, const void *data, uint32_t size
                  (unsigned)size);
         return;
     }
-    const int cam = mvtd_rig_find(&d->rig, m.camera != NULL ? m.camera : "");
+    const int cam = mvt_rig_find(&d->rig, m.camera != NULL ? m.camera : "");
     if (cam < 0) {
         d->rej_unknown_camera++;
         mvtd_log(d, MVTD_LOG_UNKNOWN_CAMERA, "message on %s names camera '%s', not in the rig: skipped", channel,

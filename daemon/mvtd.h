@@ -16,7 +16,7 @@
 #include "clock.h"
 #include "mvt_pft.h"
 #include "mvt_tracker.h"
-#include "rig.h"
+#include "mvt_rig.h"
 
 #define MVTD_DEFAULT_URL "udpm://239.255.76.67:7667?ttl=0"
 #define MVTD_PROC_RING 512
@@ -82,7 +82,7 @@ typedef struct mvtd {
     int32_t cam_window_n[MVT_MAX_CAMERAS + 1];
     int32_t cam_flooding[MVT_MAX_CAMERAS + 1];
     double deadline_s;
-    mvtd_rig_t rig;
+    mvt_rig_t rig;
     int pf;                    /* particle-filter mode: pft runs, tracker is unused */
     mvt_tracker_t tracker;
     mvt_pft_t *pft;

@@ -460,7 +460,7 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
     d->mode_name = mode;
 
     char err[512];
-    if (mvtd_rig_load(rig_path, sigma_px, &d->rig, err, sizeof(err)) != 0) {
+    if (mvt_rig_load(rig_path, sigma_px, &d->rig, err, sizeof(err)) != 0) {
         fprintf(stderr, "mvtrackd: %s\n", err);
         return 2;
     }

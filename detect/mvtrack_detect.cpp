@@ -30,7 +30,7 @@
 
 #include "detector.hpp"
 #include "mvtrack_camera_frame_t.h"
-#include "rig.h"
+#include "mvt_rig.h"
 #include "source.hpp"
 
 namespace {
@@ -298,15 +298,15 @@ int main(int argc, char **argv)
     /* OpenCV's backends log every probe that fails; this program says what failed in one line */
     cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);
 
-    static mvtd_rig_t rig;
+    static mvt_rig_t rig;
     char err[512];
-    if (mvtd_rig_load(rig_path.c_str(), 2.0, &rig, err, sizeof err) != 0) {
+    if (mvt_rig_load(rig_path.c_str(), 2.0, &rig, err, sizeof err) != 0) {
         fail(err);
     }
     cfg.frame_rate = rig.frame_rate;
     std::vector<std::unique_ptr<Camera>> cams;
     for (const auto &v : videos) {
-        const int k = mvtd_rig_find(&rig, v.first.c_str());
+        const int k = mvt_rig_find(&rig, v.first.c_str());
         if (k < 0) {
             std::string names;
             for (int j = 0; j < rig.num_cameras; j++) {

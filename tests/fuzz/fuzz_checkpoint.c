@@ -82,7 +82,7 @@ static void frame_set(mvtd_t *d, int64_t utime)
         m.num_detections = 1;
         m.detections = &det;
         const int n = mvtrack_camera_frame_t_encode(buf, 0, (int)sizeof(buf), &m);
-        char channel[MVTD_NAME_MAX + 16];
+        char channel[MVT_RIG_NAME_MAX + 16];
         snprintf(channel, sizeof(channel), "DETECTIONS_%s", d->rig.names[k]);
         mvtd_handle(d, channel, buf, (uint32_t)n);
     }

@@ -66,7 +66,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         len += n;
         pos += n;
         const int k = h & 0x07;
-        char channel[MVTD_NAME_MAX + 16];
+        char channel[MVT_RIG_NAME_MAX + 16];
         snprintf(channel, sizeof(channel), "DETECTIONS_%s", k < d->rig.num_cameras ? d->rig.names[k] : "stranger");
         if (mvtd_frame_wire_check(msg, (uint32_t)len) == 0) {
             mvtrack_camera_frame_t m;

@@ -1,4 +1,4 @@
-#include "rig.h"
+#include "mvt_rig.h"
 
 #include <cmath>
 #include <cstdio>
@@ -54,7 +54,7 @@ void need_total(const cv::Mat &m, const std::string &where, const char *key, int
     }
 }
 
-void load(const char *path, double default_sigma, mvtd_rig_t *rig)
+void load(const char *path, double default_sigma, mvt_rig_t *rig)
 {
     cv::FileStorage fs;
     try {
@@ -86,8 +86,8 @@ void load(const char *path, double default_sigma, mvtd_rig_t *rig)
         }
         c["name"] >> name;
         where += " (" + name + ")";
-        if (name.empty() || name.size() >= MVTD_NAME_MAX) {
-            throw RigError(where + ": name must have 1.." + std::to_string(MVTD_NAME_MAX - 1) + " characters");
+        if (name.empty() || name.size() >= MVT_RIG_NAME_MAX) {
+            throw RigError(where + ": name must have 1.." + std::to_string(MVT_RIG_NAME_MAX - 1) + " characters");
         }
         for (int j = 0; j < idx; j++) {
             if (name == rig->names[j]) {
@@ -144,7 +144,7 @@ void load(const char *path, double default_sigma, mvtd_rig_t *rig)
             throw RigError(where + ": invalid calibration (" + mvt_err_str(err) +
                            "; need fx, fy > 0 and K's last row 0 0 1)");
         }
-        std::snprintf(rig->names[idx], MVTD_NAME_MAX, "%s", name.c_str());
+        std::snprintf(rig->names[idx], MVT_RIG_NAME_MAX, "%s", name.c_str());
         rig->num_cameras++;
     }
     cv::Mat vmin = read_matrix(fs.root(), "rig", "volume_min", false);
@@ -200,7 +200,7 @@ void load(const char *path, double default_sigma, mvtd_rig_t *rig)
 
 } // namespace
 
-extern "C" int mvtd_rig_load(const char *path, double default_sigma_px, mvtd_rig_t *rig, char *err, size_t err_len)
+extern "C" int mvt_rig_load(const char *path, double default_sigma_px, mvt_rig_t *rig, char *err, size_t err_len)
 {
     std::memset(rig, 0, sizeof(*rig));
     try {
@@ -218,7 +218,7 @@ extern "C" int mvtd_rig_load(const char *path, double default_sigma_px, mvtd_rig
     return 0;
 }
 
-extern "C" int mvtd_rig_find(const mvtd_rig_t *rig, const char *name)
+extern "C" int mvt_rig_find(const mvt_rig_t *rig, const char *name)
 {
     for (int k = 0; k < rig->num_cameras; k++) {
         if (std::strcmp(rig->names[k], name) == 0) {
