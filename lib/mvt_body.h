@@ -1,6 +1,6 @@
 /*
  * mvt_body.h - one model of a person (MVT_LIFECYCLE_BODY): the steps of a frame, one file each
- * (internal to the core; docs/tracking.md, "One model of a person", gives the reasoning).
+ * (internal to the core; docs/body-model.md gives the reasoning).
  *
  * A person is a head top at (x, y, z) over a body that stands on the floor, 2 body.halfwidth_m wide.
  * Its silhouette in a camera is the box around the projections (lens included) of the head's and

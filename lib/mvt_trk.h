@@ -56,7 +56,7 @@ static inline int mvt_trk_popcount(uint32_t x)
  * that views show on background, after contra_max_s. Foreground there is what a person merged into
  * a blob looks like when the track's prediction has left the blob's band, and it lasts as long as
  * the people stay merged; background is what an absent person looks like (docs/tracking.md,
- * "Contradicted on foreground"). */
+ * "Empty places"). */
 #define MVT_TRK_FG_CONTRA MVT_R(2.0)
 /* chi-square, 3 degrees of freedom, 99.9 %: the gate of both */
 #define MVT_TRK_GATE3 MVT_R(16.27)

@@ -354,8 +354,8 @@ static void solve_cluster(mvt_tracker_t *self, int k, int r, const int live[], i
  * update pulls the track along D only as far as the blob says. The nearest such head counts; one
  * clearly lower in the picture than the track's own (top_order) does not, the top being the
  * track's. Without it, a track whose person is hidden in a merged blob took the between-heads
- * point and jumped onto the neighbour (docs/tracking.md, "Merged blobs' tops, and heights nobody
- * places"). */
+ * point and jumped onto the neighbour (docs/tracking.md, "Merged
+ * blobs"). */
 static void widen_merged_tops(mvt_tracker_t *self, const mvt_view_t *view, const int live[], int n_live,
                               const int assign[], const mvt_real heads[][4], const int16_t who[], int n_heads)
 {

@@ -18,7 +18,7 @@
  * Where camera k sent its foreground mask, the mask must also hold something near the predicted
  * head: a hidden head is foreground (merged into another's silhouette, or behind a body), and the
  * background a box spans beside and between its people hides nobody (docs/tracking.md, "Hidden
- * only in foreground"). The head then lies in the box's column band, at least body.halfwidth_m
+ * people"). The head then lies in the box's column band, at least body.halfwidth_m
  * (seen at the track's depth) inside the side edges, widened by the detection's pixel sigma. The
  * likeliest blob under a uniform position in the band (the prior mass of the band over its width)
  * constrains the track: its predicted column is

@@ -109,7 +109,7 @@ void mvt_trk_confirm(mvt_tracker_t *self, mvt_track_t *tr)
  * (density 1 / V)? N(d2; S) > 1 / V, i.e. d2 + ln((2 pi)^3 |S|) < 2 ln V. The gate alone let a
  * record whose person nobody had placed for seconds reach across the room: its walking reach grows
  * init_vel_std_ms a second, so after 3 s a person entering by a door 2.4 m away was "in reach" and
- * took the identity (docs/tracking.md, "A new person, or a lost one?"). */
+ * took the identity (docs/tracking.md, "Deleted, then born again"). */
 static int likelier_than_new(const mvt_tracker_config_t *c, mvt_real d2, mvt_real det)
 {
     const mvt_real vol = (c->volume.max[0] - c->volume.min[0]) * (c->volume.max[1] - c->volume.min[1]) *
