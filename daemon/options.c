@@ -437,7 +437,7 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
     cfg.gate = gi == 0 ? MVT_GATE_CHI2 : MVT_GATE_PAPER;
     static const mvt_merge_t merge_of[] = {MVT_MERGE_NEITHER, MVT_MERGE_SHARE, MVT_MERGE_OFF, MVT_MERGE_TOP};
     cfg.rules.merge = merge_of[ri];
-    cfg.gate_chi2 = (mvt_real)gate_chi2;
+    cfg.numerics.gate_chi2 = (mvt_real)gate_chi2;
     cfg.rules.occlusion = oi == 0;
     cfg.lifecycle = li == 1 ? MVT_LIFECYCLE_BODY : MVT_LIFECYCLE_RULES;
     if (exclusion_m < 0.0) { /* measured defaults: docs/particle-filter.md, docs/tracking.md */

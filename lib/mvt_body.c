@@ -187,7 +187,7 @@ mvt_real mvt_body_head_density(const mvt_tracker_t *self, const mvt_pkf_innov_t 
     const mvt_real r = m->outlier_radius_px;
     const mvt_real y2 = in->y[0] * in->y[0] + in->y[1] * in->y[1];
     const mvt_real displaced = y2 <= r * r ? m->p_outlier / (MVT_R(3.14159265) * r * r) : MVT_R(0.0);
-    const mvt_real own = in->d2 <= self->cfg.gate_chi2 ? mvt_trk_density(in) : MVT_R(0.0);
+    const mvt_real own = in->d2 <= self->cfg.numerics.gate_chi2 ? mvt_trk_density(in) : MVT_R(0.0);
     return (MVT_R(1.0) - m->p_outlier) * own + displaced;
 }
 

@@ -134,7 +134,7 @@ static int seed_candidate(mvt_tracker_t *self, const mvt_frame_t *frame, const i
         const mvt_real nv = MVT_EXP(MVT_R(-0.5) * in.y[1] * in.y[1] / in.S[2]) / MVT_SQRT(MVT_R(6.2831853) * in.S[2]);
         cand->lo += MVT_LOG(MVT_BODY_P_FEET * nv * (span > MVT_R(1.0) ? span : MVT_R(1.0)) +
                             (MVT_R(1.0) - MVT_BODY_P_FEET));
-        if (in.d2 <= c->gate_chi2 && mvt_pkf_update(&s, &in) == MVT_OK) {
+        if (in.d2 <= c->numerics.gate_chi2 && mvt_pkf_update(&s, &in) == MVT_OK) {
             /* the feet fixed the distance along the ray */
         }
     }
@@ -155,7 +155,7 @@ static int seed_candidate(mvt_tracker_t *self, const mvt_frame_t *frame, const i
         mvt_pkf_innov_t best_in;
         for (int e = 0; e < self->num_meas[j]; e++) {
             if (!self->body.free_det[j][e] || mvt_pkf_innovation_from(&pred, &self->meas[j][e], NULL, &in) != MVT_OK ||
-                !(in.d2 <= c->gate_chi2)) {
+                !(in.d2 <= c->numerics.gate_chi2)) {
                 continue;
             }
             if (best < 0 || in.d2 < best_in.d2) {

@@ -55,7 +55,7 @@ void mvt_body_prune(mvt_tracker_t *self)
     const mvt_tracker_config_t *c = &self->cfg;
     const mvt_real lo_delete = mvt_body_logit(c->population.exist_delete);
     const mvt_real lo_confirm = mvt_body_logit(c->population.exist_confirm);
-    const mvt_real max_var = c->max_pos_std_m * c->max_pos_std_m;
+    const mvt_real max_var = c->numerics.max_pos_std_m * c->numerics.max_pos_std_m;
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         mvt_track_t *tr = &self->tracks[t];
         if (tr->id == 0) {

@@ -50,7 +50,7 @@ static void update_feet(mvt_tracker_t *self, mvt_track_t *tr, int t, int k, cons
     mvt_real uv[2];
     mvt_pkf_innov_t in;
     if (!mvt_body_feet_visible(self, k, det, t, uv) || mvt_body_feet_innovation(self, &tr->s, k, uv, &in) != MVT_OK ||
-        !(in.d2 <= self->cfg.gate_chi2)) {
+        !(in.d2 <= self->cfg.numerics.gate_chi2)) {
         return;
     }
     if (mvt_trk_update_pixels(self, tr, &in) == MVT_OK) {
@@ -480,7 +480,7 @@ void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_rea
             const mvt_real other = ws->frag_dens[d] - mvt_body_fragment_density(self, k, t, uv);
             const mvt_real alt = lambda + (other > MVT_R(0.0) ? other : MVT_R(0.0)); /* clutter or another's piece */
             tr->exist_lo += MVT_LOG(MVT_R(1.0) - p + p * mvt_body_head_density(self, &in) / alt);
-            if (!(in.d2 <= self->cfg.gate_chi2)) {
+            if (!(in.d2 <= self->cfg.numerics.gate_chi2)) {
                 self->counters.gated_out++; /* displaced: evidence of the person, not of where */
                 continue;
             }

@@ -18,7 +18,7 @@ void mvt_tracker_config_default(mvt_tracker_config_t *c)
     c->lin = MVT_PKF_JACOBIAN;
     c->gate = MVT_GATE_CHI2;
     mvt_imm_config_default(&c->motion);
-    c->gate_chi2 = MVT_R(13.8);
+    c->numerics.gate_chi2 = MVT_R(13.8);
     c->paper.gamma = MVT_R(6.0);
     for (int i = 0; i < 3; i++) {
         c->paper.var_m2[i] = MVT_R(0.04) * MVT_R(0.04);
@@ -39,9 +39,9 @@ void mvt_tracker_config_default(mvt_tracker_config_t *c)
     c->rules.confirm_window = 5;
     c->rules.tentative_max_misses = 2;
     c->rules.coast_max_s = MVT_R(2.0);
-    c->max_pos_std_m = MVT_R(1.0);
+    c->numerics.max_pos_std_m = MVT_R(1.0);
     c->volume.margin_m = MVT_R(0.5);
-    c->var_floor_m2 = MVT_R(1e-10);
+    c->numerics.var_floor_m2 = MVT_R(1e-10);
     c->rules.merge = MVT_MERGE_NEITHER;
     c->rules.merge_width_m = MVT_R(0.5);
     c->rules.merge_ambiguity = MVT_R(4.0);
@@ -89,13 +89,13 @@ static int config_ok(const mvt_tracker_config_t *c)
             return 0;
         }
     }
-    return body_config_ok(c) && mvt_imm_config_check(&c->motion) == MVT_OK && c->gate_chi2 > MVT_R(0.0) && c->paper.gamma > MVT_R(0.0) && c->paper.delta > MVT_R(0.0) &&
+    return body_config_ok(c) && mvt_imm_config_check(&c->motion) == MVT_OK && c->numerics.gate_chi2 > MVT_R(0.0) && c->paper.gamma > MVT_R(0.0) && c->paper.delta > MVT_R(0.0) &&
            c->rules.birth_reproj_sigma > MVT_R(0.0) && c->rules.birth_min_reproj_px >= MVT_R(0.0) && c->rules.birth_min_views >= 2 &&
            c->rules.birth_min_sep_m >= MVT_R(0.0) && c->init_vel_std_ms > MVT_R(0.0) && c->rules.confirm_window >= 1 &&
            c->rules.seen_min_views >= 1 && c->rules.seen_max_std_m >= MVT_R(0.0) && isfinite(c->rules.seen_max_std_m) &&
            c->rules.confirm_window <= 32 && c->rules.confirm_hits >= 1 && c->rules.confirm_hits <= c->rules.confirm_window &&
-           c->rules.tentative_max_misses >= 1 && c->rules.coast_max_s > MVT_R(0.0) && c->max_pos_std_m > MVT_R(0.0) &&
-           c->volume.margin_m >= MVT_R(0.0) && c->var_floor_m2 >= MVT_R(0.0) &&
+           c->rules.tentative_max_misses >= 1 && c->rules.coast_max_s > MVT_R(0.0) && c->numerics.max_pos_std_m > MVT_R(0.0) &&
+           c->volume.margin_m >= MVT_R(0.0) && c->numerics.var_floor_m2 >= MVT_R(0.0) &&
            c->rules.merge_width_m > MVT_R(0.0) && isfinite(c->rules.merge_width_m) && c->rules.dup_dist_m >= MVT_R(0.0) &&
            c->rules.merge_ambiguity >= MVT_R(0.0) && isfinite(c->rules.merge_ambiguity) &&
            isfinite(c->rules.dup_dist_m) && c->volume.exit_margin_m >= MVT_R(0.0) && isfinite(c->volume.exit_margin_m) &&
@@ -445,7 +445,7 @@ int mvt_tracker_select(const mvt_tracker_t *self, int cam, const mvt_detection_t
             m.var_px2 = sigma * sigma;
             mvt_pkf_innov_t inn;
             if (!isfinite(in[i].u) || !isfinite(in[i].v) || !isfinite(sigma) ||
-                mvt_pkf_innovation_from(&pred, &m, NULL, &inn) != MVT_OK || !(inn.d2 <= self->cfg.gate_chi2)) {
+                mvt_pkf_innovation_from(&pred, &m, NULL, &inn) != MVT_OK || !(inn.d2 <= self->cfg.numerics.gate_chi2)) {
                 continue;
             }
             if (best < 0 || inn.d2 < best_d2) {

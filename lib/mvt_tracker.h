@@ -56,7 +56,7 @@ typedef enum mvt_merge {
 } mvt_merge_t;
 
 typedef enum mvt_gate {
-    MVT_GATE_CHI2 = 0,  /* innovation y^T S^-1 y <= gate_chi2 (2 dof per camera) */
+    MVT_GATE_CHI2 = 0,  /* innovation y^T S^-1 y <= numerics.gate_chi2 (2 dof per camera) */
     MVT_GATE_PAPER = 1  /* Eq. 22-26: distance to the projected ellipsoid <= paper_delta */
 } mvt_gate_t;
 
@@ -198,6 +198,14 @@ typedef struct mvt_population {
     mvt_real exist_delete;      /* ... under which a track is deleted, (0, 0.5); default 0.01 */
 } mvt_population_t;
 
+/* The estimator's bounds: what the filter itself can tell, not what people are. */
+typedef struct mvt_numerics {
+    mvt_real gate_chi2;         /* chi-square gate, 2 dof; default 13.8 (0.1 % false rejection) */
+    mvt_real max_pos_std_m;     /* a track whose position std exceeds this is deleted; default 1.0
+                                   (it is nowhere in particular any more) */
+    mvt_real var_floor_m2;      /* covariance diagonal floor; default 1e-10 */
+} mvt_numerics_t;
+
 typedef struct mvt_tracker_config {
     /* mode selectors */
     mvt_filter_t filter;        /* default MVT_FILTER_PROJECTIVE */
@@ -214,10 +222,7 @@ typedef struct mvt_tracker_config {
     mvt_population_t population; /* detection, clutter, births, stays, exits, belief */
     mvt_real init_vel_std_ms;   /* velocity std of a new track, m/s; default 1.0 (also how far a
                                    person who was lost may have walked) */
-    /* numerics */
-    mvt_real gate_chi2;         /* chi-square gate, 2 dof; default 13.8 (0.1 % false rejection) */
-    mvt_real max_pos_std_m;     /* a track whose position std exceeds this is deleted; default 1.0 */
-    mvt_real var_floor_m2;      /* covariance diagonal floor; default 1e-10 */
+    mvt_numerics_t numerics;    /* the estimator's bounds: gate, uncertainty, floor */
     /* other lifecycles and gates */
     mvt_paper_gate_t paper;     /* MVT_GATE_PAPER's parameters */
     mvt_rules_config_t rules;   /* MVT_LIFECYCLE_RULES only */
@@ -291,7 +296,7 @@ typedef struct mvt_counters {
     uint64_t deleted_tentative;       /*   tentative track missed tentative_max_misses frames */
     uint64_t deleted_unseen;          /*   confirmed track unseen for coast_max_s */
     uint64_t deleted_exit;            /*   unseen for exit_coast_s near a side wall */
-    uint64_t deleted_uncertain;       /*   position std above max_pos_std_m */
+    uint64_t deleted_uncertain;       /*   position std above numerics.max_pos_std_m */
     uint64_t deleted_outside;         /*   left the volume (plus margin) */
     uint64_t deleted_occluded;        /*   hidden, and neither seen nor needed, for occluded_max_s */
     uint64_t deleted_contradicted;    /*   unseen and in no blob in contra_views views for contra_max_s */

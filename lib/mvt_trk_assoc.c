@@ -243,7 +243,7 @@ static int hypothesise(mvt_tracker_t *self, const mvt_view_t *view, int k, const
                             dist <= c->paper.delta) {
                             cost = dist;
                         }
-                    } else if (in.d2 <= c->gate_chi2) {
+                    } else if (in.d2 <= c->numerics.gate_chi2) {
                         if (self->chroma_ok[k][d] && !two_checked[d]) {
                             two_checked[d] = 1;
                             if (blob_holds_two(view, d, (const mvt_real(*)[4])heads, n_heads)) {

@@ -146,7 +146,7 @@ void mvt_trk_delete(mvt_tracker_t *self, int64_t now_us)
             reason = &self->counters.numeric_faults;
         }
         const mvt_real *P = tr->s.P;
-        const mvt_real var_max = c->max_pos_std_m * c->max_pos_std_m;
+        const mvt_real var_max = c->numerics.max_pos_std_m * c->numerics.max_pos_std_m;
         const mvt_real lost_s = mvt_us_to_s(now_us - tr->last_explained_us);
         const mvt_real unneeded_s = mvt_us_to_s(now_us - tr->last_needed_us);
         switch (tr->status) {

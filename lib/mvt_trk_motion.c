@@ -151,7 +151,7 @@ void mvt_trk_widen_ground(mvt_tracker_t *self, mvt_track_t *tr, const mvt_real H
 mvt_err_t mvt_trk_repair(mvt_tracker_t *self, mvt_track_t *tr)
 {
     if (single(self)) {
-        return mvt_cv_repair(&tr->s, self->cfg.var_floor_m2);
+        return mvt_cv_repair(&tr->s, self->cfg.numerics.var_floor_m2);
     }
-    return mvt_imm_repair(&tr->imm, &self->cfg.motion, &tr->s, self->cfg.var_floor_m2);
+    return mvt_imm_repair(&tr->imm, &self->cfg.motion, &tr->s, self->cfg.numerics.var_floor_m2);
 }
