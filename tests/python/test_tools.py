@@ -359,3 +359,18 @@ def test_residuals_flag_a_camera_whose_points_are_not_heads(tmp_path, capsys):
             residuals.main(["--rig", str(tmp_path / "rig.yaml")] + args)
         assert e.value.code == 2
         assert msg in capsys.readouterr().err
+
+
+def test_report_quick_fails_below_a_floor(tmp_path, daemon_path, monkeypatch, capsys):
+    """`tools/mvtrack report --quick` exits 1 and names the figure when one is below its floor (here
+    a floor no tracker can meet: MOTA above 1), writing its tables all the same."""
+    import json
+    from mvtrack_tools import report
+    monkeypatch.setitem(report.FLOORS, "mot.mota_min", 1.01)
+    rc = report.main(["--quick", "--only", "mot", "--out", str(tmp_path), "--quiet"])
+    out = capsys.readouterr().out
+    assert rc == 1, out
+    assert "BELOW FLOOR: mot:" in out and "report: FAIL" in out
+    fig = json.loads((tmp_path / "figures.json").read_text())
+    assert fig["below"] and fig["figures"]["mot"]["mota_min"] > 0.9, fig
+    assert "| crowd | 1 |" in (tmp_path / "results.md").read_text()
