@@ -207,6 +207,43 @@ def test_extrinsics_from_floor_board_and_from_points(tmp_path):
         assert dpp < 0.02 and dap < 0.3, name
 
 
+def test_extrinsics_creates_a_camera_nobody_calibrated(tmp_path):
+    """--size with --points and --fit-focal: a camera not in the rig (no rig file at all) is created
+    with the principal point at the picture's centre, no distortion and the focal length fitted.
+    Camera 4 (1200 px, no distortion, its principal point 12 px / 8 px off the centre), 17 points,
+    0.3 px noise: focal within 2 %, position within 5 cm, direction within 1 degree (the principal
+    point taken at the centre, 12 px off, is 0.6 degrees of it; measured 1205 px, 1.8 cm, 0.72 degrees). Without
+    --fit-focal, or for a camera already in the rig, exit 2 and the rig file as it was."""
+    rng = np.random.default_rng(5)
+    cam = camera(4)
+    pts = [(x, y, 0.0) for x in (2.5, 3.0, 3.5) for y in (1.4, 2.0, 2.6)] + \
+          [(2.6, 1.6, 1.0), (3.4, 1.6, 1.0), (2.6, 2.4, 0.6), (3.4, 2.4, 0.6), (3.0, 2.0, 1.2)]
+    X = np.array(pts)
+    uv = cam.project(X) + rng.normal(0, 0.3, (len(X), 2))
+    ok = cam.in_image(uv) & (cam.depth(X) > 0)
+    assert ok.sum() >= 10
+    csv = tmp_path / "cam4.csv"
+    csv.write_text("u,v,x,y,z\n" + "".join(f"{u},{v},{x},{y},{z}\n" for (u, v), (x, y, z) in zip(uv[ok], X[ok])))
+    rig = tmp_path / "rig.yaml"
+    r = run("extrinsics", "--rig", str(rig), "--camera", "cam4", "--points", str(csv), "--size", "768x576")
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1 and not rig.exists(), r.stderr
+    r = run("extrinsics", "--rig", str(rig), "--camera", "cam4", "--points", str(csv), "--fit-focal")
+    assert r.returncode == 2 and "--size" in r.stderr and not rig.exists(), r.stderr
+    r = run("extrinsics", "--rig", str(rig), "--camera", "cam4", "--points", str(csv), "--fit-focal",
+            "--size", "768x576")
+    assert r.returncode == 0, r.stderr
+    got = Rig.read(rig).cameras[0]
+    dpos, dang = pose_errors(rig, cam)
+    print(f"\nnew camera: focal {got.K[0, 0]:.1f} px (true {cam.K[0, 0]:.0f}), position {dpos:.3f} m, "
+          f"angle {dang:.2f} deg")
+    assert got.width == 768 and got.height == 576 and abs(got.K[0, 2] - 383.5) < 1e-6
+    assert abs(got.K[0, 0] / cam.K[0, 0] - 1.0) < 0.02 and dpos < 0.05 and dang < 1.0
+    before = rig.read_bytes()
+    r = run("extrinsics", "--rig", str(rig), "--camera", "cam4", "--points", str(csv), "--fit-focal",
+            "--size", "768x576")
+    assert r.returncode == 2 and "already" in r.stderr and rig.read_bytes() == before, r.stderr
+
+
 def test_check_flags_under_floor_mirrored_and_alone(tmp_path):
     room = smartroom()
     rig = tmp_path / "rig.yaml"

@@ -367,11 +367,46 @@ def floor_error(img: np.ndarray, obj: np.ndarray, cam: Camera, r: np.ndarray, t:
     return float(np.median(np.linalg.norm(hit[:, :2] - obj[on, :2], axis=1)))
 
 
+def parse_size(text: str) -> tuple[int, int]:
+    try:
+        w, h = (int(x) for x in text.lower().split("x"))
+    except ValueError:
+        raise CalibError(f"--size {text}: give the picture's size as WIDTHxHEIGHT, e.g. 1280x720") from None
+    if not (16 <= w <= 16384 and 16 <= h <= 16384):
+        raise CalibError(f"--size {text}: width and height must be 16..16384 pixels")
+    return w, h
+
+
+def new_camera(name: str, size: str) -> Camera:
+    """A camera nobody calibrated: the picture's size, the principal point at its centre, no lens
+    distortion, a first focal length of one picture width (a 53-degree field) for --fit-focal to fit."""
+    w, h = parse_size(size)
+    K = np.array([[float(w), 0.0, 0.5 * (w - 1)], [0.0, float(w), 0.5 * (h - 1)], [0.0, 0.0, 1.0]])
+    return Camera(name, K, np.zeros(5), np.zeros(3), np.zeros(3), w, h, 2.0)
+
+
 def extrinsics(a) -> dict:
     rig_path = Path(a.rig)
-    rig = load_rig(rig_path, must_exist=True)
-    i = find_camera(rig, a.camera)
-    cam = rig.cameras[i]
+    if a.size and not (a.fit_focal and a.points):
+        raise CalibError("--size makes a camera nobody calibrated: it needs --points and --fit-focal")
+    rig = load_rig(rig_path, must_exist=False)
+    if rig is None and not a.size:
+        raise CalibError(f"{rig_path}: no such rig file (calibrate intrinsics creates it, or give --size WxH with "
+                         "--points and --fit-focal for a camera without a lens calibration)")
+    names = [c.name for c in rig.cameras] if rig is not None else []
+    if a.camera in names:
+        if a.size:
+            raise CalibError(f"camera '{a.camera}' is in the rig already: leave out --size to place it")
+        cam = rig.cameras[names.index(a.camera)]
+    elif a.size:
+        cam = new_camera(a.camera, a.size)
+        if rig is None:
+            rig = Rig([cam], np.array([-5.0, -5.0, 0.0]), np.array([5.0, 5.0, 2.5]), 25.0)
+        else:
+            rig.cameras.append(cam)
+    else:
+        raise CalibError(f"camera '{a.camera}' is not in the rig: calibrate its lens first (calibrate "
+                         "intrinsics), or give --size WxH with --points and --fit-focal")
     if a.points:
         img, obj = read_points(a.points)
     else:
@@ -619,6 +654,10 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--fit-focal", action="store_true",
                    help="--points: fit the focal length too (a camera without a lens calibration; principal "
                         "point and distortion as the rig has them, square pixels)")
+    p.add_argument("--size", metavar="WxH",
+                   help="--points --fit-focal for a camera not in the rig (no lens calibration): its "
+                        "picture's size; the principal point at the centre, no distortion; creates the rig "
+                        "file if missing")
     p.add_argument("--max-rms-px", type=float, default=10.0,
                    help="refuse a pose whose reprojection RMS exceeds this (default 10 px)")
     p = sub.add_parser("check", help="the whole rig: heights, directions, coverage, overlaps, consistency")
