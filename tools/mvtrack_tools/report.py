@@ -1,7 +1,8 @@
 """Regenerates the project's measured figures: runs the measurement suites and writes their tables.
 
-    tools/mvtrack report            every suite at full size (8 minutes on 2 cores, 22 the first time,
-                                    when the fragments' scenes are rendered): rewrites the tables of
+    tools/mvtrack report            every suite at full size (20 minutes on 2 cores once the scenes
+                                    and videos are rendered; the first time about 100, most of it
+                                    rendering video): rewrites the tables of
                                     docs/results.md between its `report:NAME` markers and its header
                                     line (date, commit, machine; --only leaves the header)
     tools/mvtrack report --quick    a few minutes: the same suites cut down, written to
@@ -9,10 +10,10 @@
                                     floor (run by `tools/mvtrack test`)
 
 Suites: Experiment 1 of the PKF paper (pkf against the triangulate-then-KF baseline), the many-people
-acceptance scenes, random rooms and rigs, rendered masks' fragments, the detector on vtest.avi
-against its public annotation, vtest.avi tracked in 3D, and (full only) the core's speed. Each runs
-the project's own tool (`tools/mvtrack experiment1`, `mot`, `fragments`, `vtest`, `vtest3d`,
-`bench`) into out/report[-quick]/NAME/; the floors below are stated once, here, and printed beside
+acceptance scenes, random rooms and rigs, rendered masks' fragments, (full only) rendered video
+through the detector, the detector on vtest.avi against its public annotation, vtest.avi tracked in
+3D, and (full only) the core's speed. Each runs the project's own tool (`tools/mvtrack experiment1`,
+`mot`, `fragments`, `pixels`, `vtest`, `vtest3d`, `bench`) into out/report[-quick]/NAME/; the floors below are stated once, here, and printed beside
 the figures they bound.
 """
 from __future__ import annotations
@@ -161,6 +162,35 @@ def annotation_missing(path: Path):
     return f"Not run: the annotation {path} is not on this machine.", {}, []
 
 
+def pixels(out: Path, quick: bool, quiet: bool):
+    """Rendered video -> mvtrack-detect -> mvtrackd, the smart room and random rigs 11 and 21 (full only:
+    the first run renders 18 videos, about 75 minutes; they are kept in out/report/pixels/video)."""
+    py("pixels", ["--out", str(out), "--rigs", "0", "11", "21", "--no-plots", "--quiet"], out, quiet)
+    rows = json.loads((out / "summary.json").read_text())
+    groups: dict[tuple, list[dict]] = {}
+    for r in rows:
+        groups.setdefault((r["rig"], r["scene"], r["mode"]), []).append(r)
+
+    def seeds(rs, key, fmt):
+        return " / ".join(fmt.format(r[key]) for r in sorted(rs, key=lambda r: r["seed"]))
+    md = ("Command: `tools/mvtrack pixels --rigs 0 11 21` (rig 0 the smart room, N `--rig-seed N`; crowd and "
+          "interaction, seeds 1 / 2 / 3; CLEAR MOT at 0.5 m against the head tops).\n\n")
+    md += table(["rig", "scene", "mode", "MOTA", "MOTP (mm)", "ID switches", "IDF1", "FP", "misses"],
+                [["smart room" if rig == 0 else f"random {rig}", scene, mode, seeds(rs, "mota", "{:.3f}"),
+                  seeds(rs, "motp_mm", "{:.0f}"), seeds(rs, "id_switches", "{}"), seeds(rs, "idf1", "{:.2f}"),
+                  seeds(rs, "false_positives", "{}"), seeds(rs, "misses", "{}")]
+                 for (rig, scene, mode), rs in sorted(groups.items())])
+    fig = {}
+    for mode in sorted({r["mode"] for r in rows}):
+        rs = [r for r in rows if r["mode"] == mode]
+        fig[mode] = {"mota_mean": sum(r["mota"] for r in rs) / len(rs), "mota_min": min(r["mota"] for r in rs),
+                     "switches": sum(r["id_switches"] for r in rs)}
+    md += "\n\n" + "; ".join(f"`{m}`: mean MOTA {f['mota_mean']:.3f}, lowest {f['mota_min']:.3f}, "
+                              f"{f['switches']} switches over {sum(1 for r in rows if r['mode'] == m)} runs"
+                              for m, f in fig.items()) + "."
+    return md, fig, []
+
+
 def vtest(out: Path, quick: bool, quiet: bool):
     from .vtest_eval import GT_JSON
     if (skip := annotation_missing(GT_JSON)) is not None:
@@ -230,8 +260,8 @@ def bench(out: Path, quick: bool, quiet: bool):
 
 
 SUITES = [("experiment1", experiment1), ("mot", mot), ("random_rigs", random_rigs), ("fragments", fragments),
-          ("vtest", vtest), ("vtest3d", vtest3d), ("bench", bench)]
-QUICK_SKIP = {"bench"}  # timings on a shared CI machine say nothing
+          ("pixels", pixels), ("vtest", vtest), ("vtest3d", vtest3d), ("bench", bench)]
+QUICK_SKIP = {"bench", "pixels"}  # timings on a shared CI machine say nothing; rendering video takes an hour
 
 
 def machine() -> str:
