@@ -1,10 +1,10 @@
 """Regenerates the project's measured figures: runs the measurement suites and writes their tables.
 
-    tools/mvtrack report            every suite at full size (20 minutes on 2 cores once the scenes
-                                    and videos are rendered; the first time about 100, most of it
-                                    rendering video): rewrites the tables of
-                                    docs/results.md between its `report:NAME` markers and its header
-                                    line (date, commit, machine; --only leaves the header)
+    tools/mvtrack report            every suite at full size (18 minutes on 2 cores once the scenes
+                                    and videos are rendered; the first time about 90, most of it
+                                    rendering video): rewrites the tables of docs/results.md between
+                                    its `report:NAME` markers and its header line (date, commit,
+                                    machine; --only leaves the header)
     tools/mvtrack report --quick    a few minutes: the same suites cut down, written to
                                     out/report-quick/results.md; exits 1 when a figure is below its
                                     floor (run by `tools/mvtrack test`)
@@ -13,8 +13,8 @@ Suites: Experiment 1 of the PKF paper (pkf against the triangulate-then-KF basel
 acceptance scenes, random rooms and rigs, rendered masks' fragments, (full only) rendered video
 through the detector, the detector on vtest.avi against its public annotation, vtest.avi tracked in
 3D, and (full only) the core's speed. Each runs the project's own tool (`tools/mvtrack experiment1`,
-`mot`, `fragments`, `pixels`, `vtest`, `vtest3d`, `bench`) into out/report[-quick]/NAME/; the floors below are stated once, here, and printed beside
-the figures they bound.
+`mot`, `fragments`, `pixels`, `vtest`, `vtest3d`, `bench`) into out/report[-quick]/NAME/; the
+floors below are stated once, here, and printed beside the figures they bound.
 """
 from __future__ import annotations
 
@@ -51,7 +51,7 @@ FLOORS = {
 }
 
 
-def py(module: str, args: list[str], out: Path, quiet: bool) -> subprocess.CompletedProcess:
+def py(module: str, args: list[str], out: Path) -> subprocess.CompletedProcess:
     """Runs `python -m mvtrack_tools.MODULE ARGS` from tools/, its output captured into out/log.txt."""
     out.mkdir(parents=True, exist_ok=True)
     r = subprocess.run([sys.executable, "-m", f"mvtrack_tools.{module}"] + args, cwd=REPO / "tools",
@@ -77,7 +77,7 @@ def table(head: list[str], rows: list[list]) -> str:
 def experiment1(out: Path, quick: bool, quiet: bool):
     args = ["--out", str(out), "--quiet"] + (["--seeds", "2", "--seconds", "30", "--levels", "100", "300",
                                              "--modes", "pkf", "kf"] if quick else [])
-    py("experiment1", args, out, quiet)
+    py("experiment1", args, out)
     res = json.loads((out / "results.json").read_text())
     rows = res["rows"]
     cmd = "tools/mvtrack experiment1" + (" --seeds 2 --seconds 30 --levels 100 300 --modes pkf kf" if quick else "")
@@ -96,7 +96,7 @@ def experiment1(out: Path, quick: bool, quiet: bool):
 
 def mot(out: Path, quick: bool, quiet: bool):
     seeds = "1" if quick else "3"
-    py("mot_run", ["--out", str(out), "--scenes", "crowd", "interaction", "--seeds", seeds, "--no-plots"], out, quiet)
+    py("mot_run", ["--out", str(out), "--scenes", "crowd", "interaction", "--seeds", seeds, "--no-plots"], out)
     rows = json.loads((out / "summary.json").read_text())
     md = (f"Command: `tools/mvtrack mot --scenes crowd interaction --seeds {seeds}` (smart room, 5 cameras; "
           "CLEAR MOT at 0.5 m, OSPA c = 0.5 m).\n\n")
@@ -117,7 +117,7 @@ def random_rigs(out: Path, quick: bool, quiet: bool):
     for n, c in rigs.items():
         d = out / f"rig{n}"
         py("mot_run", ["--out", str(d), "--scenes", "crowd", "--seeds", seeds, "--rig-seed", str(n),
-                       "--cameras", str(c), "--no-plots"], d, quiet)
+                       "--cameras", str(c), "--no-plots"], d)
         rows += [dict(r, rig=n, cameras=c) for r in json.loads((d / "summary.json").read_text())]
         if not quiet:
             print(f"[report] random rig {n}: done", file=sys.stderr)
@@ -136,7 +136,7 @@ def random_rigs(out: Path, quick: bool, quiet: bool):
 
 def fragments(out: Path, quick: bool, quiet: bool):
     args = ["--out", str(out)] + (["--models", "rows", "--scenes", "interaction", "crowd", "--seeds", "1"] if quick else [])
-    py("fragments", args, out, quiet)
+    py("fragments", args, out)
     rows = json.loads((out / "summary.json").read_text())
     mean = sum(r["mota"] for r in rows) / len(rows)
     ghosts = sum(r["column_ghosts"] for r in rows)
@@ -165,7 +165,7 @@ def annotation_missing(path: Path):
 def pixels(out: Path, quick: bool, quiet: bool):
     """Rendered video -> mvtrack-detect -> mvtrackd, the smart room and random rigs 11 and 21 (full only:
     the first run renders 18 videos, about 75 minutes; they are kept in out/report/pixels/video)."""
-    py("pixels", ["--out", str(out), "--rigs", "0", "11", "21", "--no-plots", "--quiet"], out, quiet)
+    py("pixels", ["--out", str(out), "--rigs", "0", "11", "21", "--no-plots", "--quiet"], out)
     rows = json.loads((out / "summary.json").read_text())
     groups: dict[tuple, list[dict]] = {}
     for r in rows:
@@ -195,7 +195,7 @@ def vtest(out: Path, quick: bool, quiet: bool):
     from .vtest_eval import GT_JSON
     if (skip := annotation_missing(GT_JSON)) is not None:
         return skip
-    r = last_json(py("vtest_eval", ["--json"] + ([] if quick else ["--peers"]), out, quiet).stdout)
+    r = last_json(py("vtest_eval", ["--json"] + ([] if quick else ["--peers"]), out).stdout)
     md = (f"Command: `tools/mvtrack vtest{'' if quick else ' --peers'}` (vtest.avi against the public annotation of "
           "every frame from 20 on; heads within 15 px; each detector on one core, decoding excluded).\n\n")
     names = {"mvtrack-detect": "mvtrack-detect (masks and colour on)",
@@ -225,7 +225,7 @@ def vtest3d(out: Path, quick: bool, quiet: bool):
     from .vtest3d import GT
     if (skip := annotation_missing(GT)) is not None:
         return skip
-    r = last_json(py("vtest3d", ["--out", str(out), "--json"], out, quiet).stdout)
+    r = last_json(py("vtest3d", ["--out", str(out), "--json"], out).stdout)
     md = ("Command: `tools/mvtrack vtest3d` (one camera, its rig fitted to the annotation's feet; CLEAR MOT on the "
           "ground plane at 1 m).\n\n")
     md += table(["frames", "MOTA", "MOTP (m)", "ID switches", "IDF1", "false positives", "misses"],
