@@ -242,6 +242,9 @@ def test_extrinsics_creates_a_camera_nobody_calibrated(tmp_path):
     r = run("extrinsics", "--rig", str(rig), "--camera", "cam4", "--points", str(csv), "--fit-focal",
             "--size", "768x576")
     assert r.returncode == 2 and "already" in r.stderr and rig.read_bytes() == before, r.stderr
+    r = run("check", "--rig", str(rig))
+    assert r.returncode == 0 and "PROBLEM the volume is calibrate's placeholder" in r.stderr, r.stderr
+    assert any("placeholder" in p for p in json.loads(r.stdout.strip().splitlines()[-1])["problems"])
 
 
 def test_check_flags_under_floor_mirrored_and_alone(tmp_path):

@@ -107,6 +107,9 @@ class Board:
 
 # ---- rig file -------------------------------------------------------------------------------------
 
+# the volume a rig file calibrate creates holds until the user sets the room's (check says so)
+PLACEHOLDER_MIN, PLACEHOLDER_MAX = np.array([-5.0, -5.0, 0.0]), np.array([5.0, 5.0, 2.5])
+
 def load_rig(path: Path, must_exist: bool) -> Rig | None:
     if not path.exists():
         if must_exist:
@@ -262,7 +265,7 @@ def intrinsics(a) -> dict:
     n_dist = 8 if a.rational else 5
     cam = Camera(a.camera, K, dist.ravel()[:n_dist], np.zeros(3), np.zeros(3), w, h, 2.0)
     if rig is None:
-        rig = Rig([cam], np.array([-5.0, -5.0, 0.0]), np.array([5.0, 5.0, 2.5]), 25.0)
+        rig = Rig([cam], PLACEHOLDER_MIN.copy(), PLACEHOLDER_MAX.copy(), 25.0)
     else:
         try:
             i = find_camera(rig, a.camera)
@@ -401,7 +404,7 @@ def extrinsics(a) -> dict:
     elif a.size:
         cam = new_camera(a.camera, a.size)
         if rig is None:
-            rig = Rig([cam], np.array([-5.0, -5.0, 0.0]), np.array([5.0, 5.0, 2.5]), 25.0)
+            rig = Rig([cam], PLACEHOLDER_MIN.copy(), PLACEHOLDER_MAX.copy(), 25.0)
         else:
             rig.cameras.append(cam)
     else:
@@ -554,6 +557,9 @@ def check(a) -> dict:
     seen = np.array([sees(c, grid) for c in rig.cameras])
     n_seen = seen.sum(axis=0)
     cams, problems = [], []
+    if np.allclose(lo, PLACEHOLDER_MIN) and np.allclose(hi, PLACEHOLDER_MAX):
+        problems.append("the volume is calibrate's placeholder (-5..5 m, 0..2.5 m): set volume_min/volume_max to "
+                        "the room's floor area and head heights; the floor shares printed are over the placeholder")
     for k, c in enumerate(rig.cameras):
         C = c.centre
         axis = c.R[2]  # the optical axis in the world
