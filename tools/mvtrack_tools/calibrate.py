@@ -110,6 +110,11 @@ class Board:
 # the volume a rig file calibrate creates holds until the user sets the room's (check says so)
 PLACEHOLDER_MIN, PLACEHOLDER_MAX = np.array([-5.0, -5.0, 0.0]), np.array([5.0, 5.0, 2.5])
 
+
+def new_rig(cam: Camera) -> Rig:
+    """The rig file calibrate creates for its first camera: the placeholder volume, 25 fps."""
+    return Rig([cam], PLACEHOLDER_MIN.copy(), PLACEHOLDER_MAX.copy(), 25.0)
+
 def load_rig(path: Path, must_exist: bool) -> Rig | None:
     if not path.exists():
         if must_exist:
@@ -265,7 +270,7 @@ def intrinsics(a) -> dict:
     n_dist = 8 if a.rational else 5
     cam = Camera(a.camera, K, dist.ravel()[:n_dist], np.zeros(3), np.zeros(3), w, h, 2.0)
     if rig is None:
-        rig = Rig([cam], PLACEHOLDER_MIN.copy(), PLACEHOLDER_MAX.copy(), 25.0)
+        rig = new_rig(cam)
     else:
         try:
             i = find_camera(rig, a.camera)
@@ -404,7 +409,7 @@ def extrinsics(a) -> dict:
     elif a.size:
         cam = new_camera(a.camera, a.size)
         if rig is None:
-            rig = Rig([cam], PLACEHOLDER_MIN.copy(), PLACEHOLDER_MAX.copy(), 25.0)
+            rig = new_rig(cam)
         else:
             rig.cameras.append(cam)
     else:

@@ -5,7 +5,7 @@
                                     rendering video): rewrites the tables of docs/results.md between
                                     its `report:NAME` markers and its header line (date, commit,
                                     machine; --only leaves the header)
-    tools/mvtrack report --quick    a few minutes: the same suites cut down, written to
+    tools/mvtrack report --quick    a few minutes: the simulated suites cut down, written to
                                     out/report-quick/results.md; exits 1 when a figure is below its
                                     floor (run by `tools/mvtrack test`)
 
@@ -45,10 +45,9 @@ FLOORS = {
     "random_rigs.mota_mean_min": 0.95,
     "fragments.mota_mean_min": 0.93,
     "fragments.column_ghosts_max": 0,
-    "vtest.recall_min": 0.85,                       # heads within 15 px
-    "vtest.false_blobs_per_frame_max": 1.0,
-    "vtest3d.mota_min": 0.80,                       # ground plane, 1 m
 }
+# vtest.avi's bars are tests/python/test_detect.py's (recall, false blobs, MOTA in 3D), checked on
+# every test run: the report writes those figures and does not state the bars again
 
 
 def py(module: str, args: list[str], out: Path) -> subprocess.CompletedProcess:
@@ -195,8 +194,8 @@ def vtest(out: Path, quick: bool, quiet: bool):
     from .vtest_eval import GT_JSON
     if (skip := annotation_missing(GT_JSON)) is not None:
         return skip
-    r = last_json(py("vtest_eval", ["--json"] + ([] if quick else ["--peers"]), out).stdout)
-    md = (f"Command: `tools/mvtrack vtest{'' if quick else ' --peers'}` (vtest.avi against the public annotation of "
+    r = last_json(py("vtest_eval", ["--json", "--peers"], out).stdout)
+    md = ("Command: `tools/mvtrack vtest --peers` (vtest.avi against the public annotation of "
           "every frame from 20 on; heads within 15 px; each detector on one core, decoding excluded).\n\n")
     names = {"mvtrack-detect": "mvtrack-detect (masks and colour on)",
              "textbook mog2": "MOG2 with shadows, opening and closing, components, the component's top",
@@ -212,13 +211,7 @@ def vtest(out: Path, quick: bool, quiet: bool):
                              f"{v['recall']:.3f}", f"{v['false_blobs_per_frame']:.2f}",
                              f"{v['head_error_px_median']:.1f}", f"{det['ms_per_frame']:.1f}"])
     md += table(["detector", "frames", "recall", "false blobs per frame", "median head error (px)", "ms per frame"], rows)
-    fails = []
-    if r["recall"] < FLOORS["vtest.recall_min"]:
-        fails.append(f"vtest: recall {r['recall']:.3f} < {FLOORS['vtest.recall_min']}")
-    if r["false_blobs_per_frame"] > FLOORS["vtest.false_blobs_per_frame_max"]:
-        fails.append(f"vtest: {r['false_blobs_per_frame']:.2f} false blobs per frame > "
-                     f"{FLOORS['vtest.false_blobs_per_frame_max']}")
-    return md, {"recall": r["recall"], "false_blobs_per_frame": r["false_blobs_per_frame"]}, fails
+    return md, {"recall": r["recall"], "false_blobs_per_frame": r["false_blobs_per_frame"]}, []
 
 
 def vtest3d(out: Path, quick: bool, quiet: bool):
@@ -232,9 +225,7 @@ def vtest3d(out: Path, quick: bool, quiet: bool):
                 [[k, f"{v['mota']:.3f}", f"{v['motp_m']:.3f}", v["switches"], f"{v['idf1']:.3f}", v["false_positives"],
                   v["misses"]] for k, v in (("0-794", r["all"]), ("0-399", r["frames_0_399"]),
                                              ("400-794", r["frames_400_794"]))])
-    fails = [] if r["all"]["mota"] >= FLOORS["vtest3d.mota_min"] else \
-        [f"vtest3d: MOTA {r['all']['mota']:.3f} < {FLOORS['vtest3d.mota_min']}"]
-    return md, {"mota": r["all"]["mota"]}, fails
+    return md, {"mota": r["all"]["mota"]}, []
 
 
 def bench(out: Path, quick: bool, quiet: bool):
@@ -261,7 +252,9 @@ def bench(out: Path, quick: bool, quiet: bool):
 
 SUITES = [("experiment1", experiment1), ("mot", mot), ("random_rigs", random_rigs), ("fragments", fragments),
           ("pixels", pixels), ("vtest", vtest), ("vtest3d", vtest3d), ("bench", bench)]
-QUICK_SKIP = {"bench", "pixels"}  # timings on a shared CI machine say nothing; rendering video takes an hour
+# timings on a shared CI machine say nothing; rendering video takes an hour; vtest.avi's suites run in
+# test_detect.py with their bars
+QUICK_SKIP = {"bench", "pixels", "vtest", "vtest3d"}
 
 
 def machine() -> str:
