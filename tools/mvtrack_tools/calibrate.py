@@ -115,6 +115,7 @@ def new_rig(cam: Camera) -> Rig:
     """The rig file calibrate creates for its first camera: the placeholder volume, 25 fps."""
     return Rig([cam], PLACEHOLDER_MIN.copy(), PLACEHOLDER_MAX.copy(), 25.0)
 
+
 def load_rig(path: Path, must_exist: bool) -> Rig | None:
     if not path.exists():
         if must_exist:
