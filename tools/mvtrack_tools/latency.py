@@ -48,14 +48,37 @@ from .paths import DAEMON, REPO
 from .rig import smartroom
 
 
-def walkers(rng, n, frames, dt, lo, hi):
+def walkers(rng, n, frames, dt, lo, hi, apart=False):
+    """n people walking at random (velocity an Ornstein-Uhlenbeck process, turning at the walls).
+    With apart, they keep their personal space as the crowd scenes' walkers do (crowd.py): pushed
+    apart within 0.9 m, and no step that brings two heads closer than 0.45 m (two bodies cannot
+    overlap); without it they pass through each other (the timing scenes here, where only the
+    load matters)."""
     pos = np.column_stack([rng.uniform(lo[0] + 0.5, hi[0] - 0.5, n), rng.uniform(lo[1] + 0.5, hi[1] - 0.5, n)])
+    for i in range(1, n if apart else 0):  # standing places at least 0.9 m apart
+        for _ in range(1000):
+            if np.min(np.linalg.norm(pos[:i] - pos[i], axis=1)) >= 0.9:
+                break
+            pos[i] = [rng.uniform(lo[0] + 0.5, hi[0] - 0.5), rng.uniform(lo[1] + 0.5, hi[1] - 0.5)]
     vel = rng.normal(0, 0.6, (n, 2))
     height = rng.uniform(1.55, 1.9, n)
     out = np.zeros((frames, n, 3))
     for f in range(frames):
         vel += -0.3 * vel * dt + 0.5 * np.sqrt(dt) * rng.normal(size=(n, 2))
-        pos += vel * dt
+        for i in range(n if apart else 0):
+            d = pos[i] - np.delete(pos, i, axis=0)
+            r = np.linalg.norm(d, axis=1)
+            near = (r > 1e-6) & (r < 0.9)
+            vel[i] += (d[near] / r[near, None] * (1.2 * (0.9 - r[near]) / 0.9)[:, None]).sum(axis=0) * dt / 0.5
+        for i in range(n):
+            step = vel[i] * dt
+            others = np.delete(pos, i, axis=0)
+            r_now = np.linalg.norm(pos[i] - others, axis=1)
+            r_next = np.linalg.norm(pos[i] + step - others, axis=1)
+            if apart and np.any((r_next < 0.45) & (r_next < r_now)):
+                vel[i] *= 0.0
+                continue
+            pos[i] += step
         for a in range(2):
             low, high = pos[:, a] < lo[a] + 0.3, pos[:, a] > hi[a] - 0.3
             vel[low | high, a] *= -1

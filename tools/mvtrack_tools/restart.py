@@ -2,9 +2,9 @@
 
     tools/mvtrack restart [--how kill|term|nostate|nofiles] [--seconds 14] [--at 6] [--down 1]
 
-Publishes 5 people walking the SmartRoom rig (5 cameras, 25 fps, 2 px noise, 5 % misses) live on a
-private LCM multicast port (ttl=0) to `mvtrackd --state DIR/state`, stops the daemon --at seconds
-into the scene (--how kill: SIGKILL; term: SIGTERM; nostate: SIGKILL and the checkpoint deleted,
+Publishes 5 people walking the SmartRoom rig and keeping their personal space (5 cameras, 25 fps,
+2 px noise, 5 % misses) live on a private LCM multicast port (ttl=0) to `mvtrackd --state
+DIR/state`, stops the daemon --at seconds into the scene (--how kill: SIGKILL; term: SIGTERM; nostate: SIGKILL and the checkpoint deleted,
 its identity lease FILE.ids kept; nofiles: SIGKILL, every state file deleted: only the wall-clock
 identity floor is left), starts it again --down seconds later while the cameras keep sending, and
 reads every TRACKS message. Prints, and writes to out/restart/HOW.json:
@@ -134,7 +134,7 @@ def run(how: str, seconds: float, at: float, down: float, mode: str, out: Path, 
     period = 1.0 / rig.frame_rate
     frames = int(seconds / period)
     rng = np.random.default_rng(seed)
-    people = walkers(rng, 5, frames, period, rig.volume_min, rig.volume_max)
+    people = walkers(rng, 5, frames, period, rig.volume_min, rig.volume_max, apart=True)
 
     sub = lcm.LCM(url)
     got: list[tuple[float, object]] = []  # (receive time, tracks_t)
@@ -214,7 +214,7 @@ def offline(seed: int, gap_s: float, at: float, seconds: float, out: Path, mode:
     period = 1.0 / rig.frame_rate
     frames = int(seconds / period)
     rng = np.random.default_rng(seed)
-    people = walkers(rng, 5, frames, period, rig.volume_min, rig.volume_max)
+    people = walkers(rng, 5, frames, period, rig.volume_min, rig.volume_max, apart=True)
     u0 = 1_700_000_000_000_000
     log = out / f"scene-{seed}.lcm"
     w = lcm.EventLog(str(log), "w", overwrite=True)
