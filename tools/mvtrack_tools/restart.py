@@ -3,11 +3,11 @@
     tools/mvtrack restart [--how kill|term|nostate|nofiles] [--seconds 14] [--at 6] [--down 1]
 
 Publishes 5 people walking the SmartRoom rig and keeping their personal space (5 cameras, 25 fps,
-2 px noise, 5 % misses) live on a private LCM multicast port (ttl=0) to `mvtrackd --state
-DIR/state`, stops the daemon --at seconds into the scene (--how kill: SIGKILL; term: SIGTERM; nostate: SIGKILL and the checkpoint deleted,
-its identity lease FILE.ids kept; nofiles: SIGKILL, every state file deleted: only the wall-clock
-identity floor is left), starts it again --down seconds later while the cameras keep sending, and
-reads every TRACKS message. Prints, and writes to out/restart/HOW.json:
+2 px noise, 5 % misses) live on a private LCM multicast port (ttl=0) to `mvtrackd --state DIR/state`,
+stops the daemon --at seconds into the scene (--how kill: SIGKILL; term: SIGTERM; nostate: SIGKILL
+and the checkpoint deleted, its identity lease FILE.ids kept; nofiles: SIGKILL, every state file
+deleted: only the wall-clock identity floor is left), starts it again --down seconds later while
+the cameras keep sending, and reads every TRACKS message. Prints, and writes to out/restart/HOW.json:
 
 - kept / present: people confirmed before the stop and present after it whose track after the
   restart carries the identity they had before (matched to the truth within 0.5 m);
