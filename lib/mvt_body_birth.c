@@ -8,7 +8,11 @@
  *   the seed's feet, where visible (mvt_body_feet_visible): the point under the head on the floor;
  *   every other observed camera: its unexplained blob nearest the candidate's predicted head inside
  *   the chi-square gate, or, where the head would be in its picture and shows no such blob, the
- *   miss.
+ *   miss;
+ * and again with the other cameras first and the feet last: a blob's bottom is not its feet where
+ * clothes that match the background, or anything the model does not hold, cut the legs, and feet
+ * taken first would then put the head on the wrong place along the seed's ray, where the other
+ * views do not see it. The likelier of the two is the candidate.
  * Its log odds of a new person against clutter start at ln(b / n): b the newcomers' heads this
  * camera expects this frame (population.birth_per_s dt p_detect), n its clutter rate. Each step adds the
  * evidence: the feet's row against a bottom anywhere below the top (MVT_BODY_P_FEET), a view's
@@ -106,7 +110,73 @@ static mvt_real detect_prob(const mvt_tracker_t *self, const mvt_frame_t *frame,
     return self->p_detect_k[j] * mvt_body_shown(self, j, axis, -1);
 }
 
-/* The candidate seeded by blob d of camera k. 1 when it lies in the volume. */
+/* The seed's feet, where visible: their row's evidence against a bottom anywhere below the top
+ * (a fragment's feet say its top is no head's height), then, inside the gate, the point under the
+ * head on the floor (it fixes the distance along the seed's ray). */
+static void feet_into(const mvt_tracker_t *self, int k, const mvt_detection_t *det, mvt_cv_state_t *s,
+                      mvt_body_cand_t *cand)
+{
+    mvt_real fuv[2];
+    mvt_pkf_innov_t in;
+    if (!mvt_body_feet_visible(self, k, det, -1, fuv) || mvt_body_feet_innovation(self, s, k, fuv, &in) != MVT_OK) {
+        return;
+    }
+    const mvt_real span = (mvt_real)self->cams[k].height - det->v;
+    const mvt_real nv = MVT_EXP(MVT_R(-0.5) * in.y[1] * in.y[1] / in.S[2]) / MVT_SQRT(MVT_R(6.2831853) * in.S[2]);
+    cand->lo += MVT_LOG(MVT_BODY_P_FEET * nv * (span > MVT_R(1.0) ? span : MVT_R(1.0)) + (MVT_R(1.0) - MVT_BODY_P_FEET));
+    if (in.d2 <= self->cfg.numerics.gate_chi2) {
+        (void)mvt_pkf_update(s, &in);
+    }
+}
+
+/* Every observed camera but the seed's: its unexplained blob nearest the candidate's predicted head
+ * inside the gate (evidence 1 - p + p N / lambda, and the update), or the miss (1 - p). */
+static void views_into(const mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order, int k,
+                       mvt_cv_state_t *s, mvt_body_cand_t *cand)
+{
+    for (int oi = 0; oi < n_order; oi++) {
+        const int j = order[oi];
+        if (j == k) {
+            continue;
+        }
+        mvt_pkf_pred_t pred;
+        if (mvt_pkf_predict_obs(s, &self->cams[j], MVT_PKF_JACOBIAN, &pred) != MVT_OK) {
+            continue;
+        }
+        const mvt_real p = detect_prob(self, frame, j, s->x, pred.h);
+        if (!(p > MVT_R(0.0))) {
+            continue;
+        }
+        int best = -1;
+        mvt_pkf_innov_t in, best_in;
+        for (int e = 0; e < self->num_meas[j]; e++) {
+            if (!self->body.free_det[j][e] || mvt_pkf_innovation_from(&pred, &self->meas[j][e], NULL, &in) != MVT_OK ||
+                !(in.d2 <= self->cfg.numerics.gate_chi2)) {
+                continue;
+            }
+            if (best < 0 || in.d2 < best_in.d2) {
+                best = e;
+                best_in = in;
+            }
+        }
+        if (best < 0) {
+            cand->lo += MVT_LOG(MVT_R(1.0) - p);
+            continue;
+        }
+        const mvt_real lambda = mvt_body_clutter_density(self, j);
+        cand->lo += MVT_LOG(MVT_R(1.0) - p + p * mvt_trk_density(&best_in) / lambda);
+        if (mvt_pkf_update(s, &best_in) == MVT_OK) {
+            cand->det[j] = (int16_t)best;
+        }
+    }
+}
+
+/* The candidate seeded by blob d of camera k. 1 when it lies in the volume. A blob's bottom is its
+ * feet only when nothing hides the legs (clothes that match the floor or the wall behind them cut a
+ * body above its feet as well as furniture does), so the candidate is built both ways: the feet
+ * first, fixing the distance along the seed's ray before the other views are searched along it,
+ * and the other views first, the feet last; the likelier of the two is the candidate (with one view
+ * they are the same). */
 static int seed_candidate(mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order, int k, int d,
                           mvt_real dt, mvt_body_cand_t *cand)
 {
@@ -127,50 +197,16 @@ static int seed_candidate(mvt_tracker_t *self, const mvt_frame_t *frame, const i
         cand->det[j] = -1;
     }
     cand->det[k] = (int16_t)d;
-    mvt_real fuv[2];
-    mvt_pkf_innov_t in;
-    if (mvt_body_feet_visible(self, k, det, -1, fuv) && mvt_body_feet_innovation(self, &s, k, fuv, &in) == MVT_OK) {
-        const mvt_real span = (mvt_real)self->cams[k].height - det->v;
-        const mvt_real nv = MVT_EXP(MVT_R(-0.5) * in.y[1] * in.y[1] / in.S[2]) / MVT_SQRT(MVT_R(6.2831853) * in.S[2]);
-        cand->lo += MVT_LOG(MVT_BODY_P_FEET * nv * (span > MVT_R(1.0) ? span : MVT_R(1.0)) +
-                            (MVT_R(1.0) - MVT_BODY_P_FEET));
-        if (in.d2 <= c->numerics.gate_chi2 && mvt_pkf_update(&s, &in) == MVT_OK) {
-            /* the feet fixed the distance along the ray */
-        }
-    }
-    for (int oi = 0; oi < n_order; oi++) {
-        const int j = order[oi];
-        if (j == k) {
-            continue;
-        }
-        mvt_pkf_pred_t pred;
-        if (mvt_pkf_predict_obs(&s, &self->cams[j], MVT_PKF_JACOBIAN, &pred) != MVT_OK) {
-            continue;
-        }
-        const mvt_real p = detect_prob(self, frame, j, s.x, pred.h);
-        if (!(p > MVT_R(0.0))) {
-            continue;
-        }
-        int best = -1;
-        mvt_pkf_innov_t best_in;
-        for (int e = 0; e < self->num_meas[j]; e++) {
-            if (!self->body.free_det[j][e] || mvt_pkf_innovation_from(&pred, &self->meas[j][e], NULL, &in) != MVT_OK ||
-                !(in.d2 <= c->numerics.gate_chi2)) {
-                continue;
-            }
-            if (best < 0 || in.d2 < best_in.d2) {
-                best = e;
-                best_in = in;
-            }
-        }
-        if (best < 0) {
-            cand->lo += MVT_LOG(MVT_R(1.0) - p);
-            continue;
-        }
-        const mvt_real lambda = mvt_body_clutter_density(self, j);
-        cand->lo += MVT_LOG(MVT_R(1.0) - p + p * mvt_trk_density(&best_in) / lambda);
-        if (mvt_pkf_update(&s, &best_in) == MVT_OK) {
-            cand->det[j] = (int16_t)best;
+    mvt_body_cand_t late = *cand;
+    mvt_cv_state_t s_late = s;
+    feet_into(self, k, det, &s, cand);
+    views_into(self, frame, order, n_order, k, &s, cand);
+    if (n_order > 1) {
+        views_into(self, frame, order, n_order, k, &s_late, &late);
+        feet_into(self, k, det, &s_late, &late);
+        if (late.lo > cand->lo) {
+            *cand = late;
+            s = s_late;
         }
     }
     for (int i = 0; i < 3; i++) {
