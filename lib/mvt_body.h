@@ -33,9 +33,6 @@
  *                 clutter and other bodies' fragments), hosted (with the merged box's edges), missed with a fragment
  *                 of the body in view (no evidence), or missed; the camera's clutter rate,
  *                 detection probability and fragment rate are learnt
- *   move         mvt_body_move.c: a track whose head two or more views judged displaced is tested
- *                against its person being where those views' blobs meet, and starts again there
- *                (label kept) where that place explains its blobs better
  *   one view     mvt_body_update.c: a track one camera alone placed takes its blob's visible feet;
  *                a track fewer than two placed keeps the person's height (the last two views gave)
  *   birth        mvt_body_birth.c: each unexplained blob is the seed of a candidate: its head ray
@@ -94,10 +91,6 @@
 /* A merged blob's edge that one body's silhouette alone puts there measures that edge of the body
  * when it lies within this many squared standard deviations of it (chi-square, 1 dof, 99.7 %). */
 #define MVT_BODY_EDGE_GATE MVT_R(9.0)
-/* How long, s, an estimate may lag its person before two views judge the head displaced: a track
- * tested against its displaced views' place (mvt_body_move.c) is widened by walking pace over it. */
-#define MVT_BODY_MOVE_S MVT_R(0.25)
-
 /* A time without frames longer than this many of the rig's typical intervals (and than a person
  * takes to walk a body's width) is an outage: nobody watched (mvt_body_step). */
 #define MVT_BODY_GAP_FRAMES MVT_R(4.0)
@@ -206,7 +199,6 @@ void mvt_body_existence(mvt_tracker_t *self, mvt_real dt);
 void mvt_body_visibility(mvt_tracker_t *self, const mvt_view_t *view, int k);
 void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k);
 void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_real dt);
-void mvt_body_move(mvt_tracker_t *self, const mvt_frame_t *frame);
 void mvt_body_one_view(mvt_tracker_t *self, const mvt_frame_t *frame);
 void mvt_body_birth(mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order, mvt_real dt);
 void mvt_body_prune(mvt_tracker_t *self);
