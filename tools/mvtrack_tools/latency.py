@@ -415,8 +415,12 @@ def main(argv=None) -> int:
     for k, v in res.items():
         print(f"{k}: {v}")
     bound_ms = 2.0 if a.flood_camera < 0 else 5.0
-    ok = res["latency_ms_p99"] <= bound_ms and rates and min(rates) >= 24.5 and max(rates) <= 25.5
-    print("latency: " + ("PASS" if ok else "FAIL") + f" (p99 <= {bound_ms:g} ms, every 10 s window 25 +- 0.5 Hz)")
+    if rates:
+        rate_ok, rate_rule = min(rates) >= 24.5 and max(rates) <= 25.5, "every 10 s window 25 +- 0.5 Hz"
+    else:  # no 10 s window inside a run this short: its mean rate
+        rate_ok, rate_rule = abs(res["rate_hz_mean"] - 25.0) <= 0.5, "the run's mean rate 25 +- 0.5 Hz (no 10 s window in it)"
+    ok = res["latency_ms_p99"] <= bound_ms and rate_ok
+    print("latency: " + ("PASS" if ok else "FAIL") + f" (p99 <= {bound_ms:g} ms, {rate_rule})")
     return 0 if ok else 1
 
 
