@@ -110,15 +110,14 @@ static mvt_real detect_prob(const mvt_tracker_t *self, const mvt_frame_t *frame,
     return self->p_detect_k[j] * mvt_body_shown(self, j, axis, -1);
 }
 
-/* The seed's feet, where visible: their row's evidence against a bottom anywhere below the top
- * (a fragment's feet say its top is no head's height), then, inside the gate, the point under the
+/* The seed's visible feet fuv: their row's evidence against a bottom anywhere below the top (a
+ * fragment's feet say its top is no head's height), then, inside the gate, the point under the
  * head on the floor (it fixes the distance along the seed's ray). */
-static void feet_into(const mvt_tracker_t *self, int k, const mvt_detection_t *det, mvt_cv_state_t *s,
-                      mvt_body_cand_t *cand)
+static void feet_into(const mvt_tracker_t *self, int k, const mvt_detection_t *det, const mvt_real fuv[2],
+                      mvt_cv_state_t *s, mvt_body_cand_t *cand)
 {
-    mvt_real fuv[2];
     mvt_pkf_innov_t in;
-    if (!mvt_body_feet_visible(self, k, det, -1, fuv) || mvt_body_feet_innovation(self, s, k, fuv, &in) != MVT_OK) {
+    if (mvt_body_feet_innovation(self, s, k, fuv, &in) != MVT_OK) {
         return;
     }
     const mvt_real span = (mvt_real)self->cams[k].height - det->v;
@@ -175,8 +174,8 @@ static void views_into(const mvt_tracker_t *self, const mvt_frame_t *frame, cons
  * feet only when nothing hides the legs (clothes that match the floor or the wall behind them cut a
  * body above its feet as well as furniture does), so the candidate is built both ways: the feet
  * first, fixing the distance along the seed's ray before the other views are searched along it,
- * and the other views first, the feet last; the likelier of the two is the candidate (with one view
- * they are the same). */
+ * and the other views first, the feet last; the likelier of the two is the candidate (with one view,
+ * or no visible feet, they are the same and built once). */
 static int seed_candidate(mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order, int k, int d,
                           mvt_real dt, mvt_body_cand_t *cand)
 {
@@ -197,13 +196,17 @@ static int seed_candidate(mvt_tracker_t *self, const mvt_frame_t *frame, const i
         cand->det[j] = -1;
     }
     cand->det[k] = (int16_t)d;
+    mvt_real fuv[2];
+    const int feet = mvt_body_feet_visible(self, k, det, -1, fuv);
     mvt_body_cand_t late = *cand;
     mvt_cv_state_t s_late = s;
-    feet_into(self, k, det, &s, cand);
+    if (feet) {
+        feet_into(self, k, det, fuv, &s, cand);
+    }
     views_into(self, frame, order, n_order, k, &s, cand);
-    if (n_order > 1) {
+    if (feet && n_order > 1) { /* without feet, or other views, the two orders are one */
         views_into(self, frame, order, n_order, k, &s_late, &late);
-        feet_into(self, k, det, &s_late, &late);
+        feet_into(self, k, det, fuv, &s_late, &late);
         if (late.lo > cand->lo) {
             *cand = late;
             s = s_late;

@@ -65,17 +65,19 @@ def walkers(rng, n, frames, dt, lo, hi, apart=False):
     out = np.zeros((frames, n, 3))
     for f in range(frames):
         vel += -0.3 * vel * dt + 0.5 * np.sqrt(dt) * rng.normal(size=(n, 2))
+        if not apart:
+            pos += vel * dt
         for i in range(n if apart else 0):
             d = pos[i] - np.delete(pos, i, axis=0)
             r = np.linalg.norm(d, axis=1)
             near = (r > 1e-6) & (r < 0.9)
             vel[i] += (d[near] / r[near, None] * (1.2 * (0.9 - r[near]) / 0.9)[:, None]).sum(axis=0) * dt / 0.5
-        for i in range(n):
+        for i in range(n if apart else 0):
             step = vel[i] * dt
             others = np.delete(pos, i, axis=0)
             r_now = np.linalg.norm(pos[i] - others, axis=1)
             r_next = np.linalg.norm(pos[i] + step - others, axis=1)
-            if apart and np.any((r_next < 0.45) & (r_next < r_now)):
+            if np.any((r_next < 0.45) & (r_next < r_now)):
                 vel[i] *= 0.0
                 continue
             pos[i] += step
