@@ -323,7 +323,7 @@ static void learn_clutter(mvt_tracker_t *self, int k, mvt_real dt)
 {
     int n = 0;
     for (int d = 0; d < self->num_meas[k]; d++) {
-        n += self->body.free_det[k][d];
+        n += self->body.free_det[k][d] == 1; /* a displaced head's blob is its person's */
     }
     const mvt_real a = dt > MVT_R(0.0) ? MVT_R(1.0) - MVT_EXP(-dt / MVT_BODY_CLUTTER_S) : MVT_R(0.0);
     mvt_real c = self->clutter_n[k] + a * ((mvt_real)n - self->clutter_n[k]);

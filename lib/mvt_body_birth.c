@@ -128,8 +128,49 @@ static void feet_into(const mvt_tracker_t *self, int k, const mvt_detection_t *d
     }
 }
 
+/* The candidate's update by a second view, iterated (Gauss-Newton on the prior and the blob): the
+ * prior stretches metres along the seed's ray, and one linearisation there, far from the head the
+ * two rays meet at, lands off it (a head 0.2 m above the height prior is a metre along a shallow
+ * ray). in is the innovation at the prior; each pass relinearises at the last estimate,
+ * y = z - h(x_i) - H_i (x_0 - x_i), and updates the prior with it. */
+#define UPDATE_PASSES 4
+static mvt_err_t iterated_update(const mvt_camera_t *cam, const mvt_pkf_meas_t *meas, const mvt_pkf_innov_t *in,
+                                 mvt_cv_state_t *s)
+{
+    const mvt_cv_state_t prior = *s;
+    mvt_cv_state_t post = prior;
+    mvt_err_t err = mvt_pkf_update(&post, in);
+    for (int it = 1; it < UPDATE_PASSES && err == MVT_OK; it++) {
+        mvt_cv_state_t at = prior;
+        for (int i = 0; i < 3; i++) {
+            at.x[i] = post.x[i];
+        }
+        mvt_pkf_pred_t pred;
+        mvt_pkf_innov_t rel;
+        if (mvt_pkf_predict_obs(&at, cam, MVT_PKF_JACOBIAN, &pred) != MVT_OK ||
+            mvt_pkf_innovation_from(&pred, meas, NULL, &rel) != MVT_OK) {
+            break; /* keep the last estimate */
+        }
+        for (int r = 0; r < 2; r++) {
+            for (int i = 0; i < 3; i++) {
+                rel.y[r] -= rel.H[r * 3 + i] * (prior.x[i] - post.x[i]);
+            }
+        }
+        mvt_cv_state_t next = prior;
+        if (mvt_pkf_update(&next, &rel) != MVT_OK) {
+            break;
+        }
+        post = next;
+    }
+    if (err == MVT_OK) {
+        *s = post;
+    }
+    return err;
+}
+
 /* Every observed camera but the seed's: its unexplained blob nearest the candidate's predicted head
- * inside the gate (evidence 1 - p + p N / lambda, and the update), or the miss (1 - p). */
+ * inside the gate, or where there is none the nearest merged blob topped by someone other than the
+ * track that took it (evidence 1 - p + p N / lambda, and the update), or the miss (1 - p). */
 static void views_into(const mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order, int k,
                        mvt_cv_state_t *s, mvt_body_cand_t *cand)
 {
@@ -149,11 +190,14 @@ static void views_into(const mvt_tracker_t *self, const mvt_frame_t *frame, cons
         int best = -1;
         mvt_pkf_innov_t in, best_in;
         for (int e = 0; e < self->num_meas[j]; e++) {
-            if (!self->body.free_det[j][e] || mvt_pkf_innovation_from(&pred, &self->meas[j][e], NULL, &in) != MVT_OK ||
+            const uint8_t f = self->body.free_det[j][e];
+            if (!f || mvt_pkf_innovation_from(&pred, &self->meas[j][e], NULL, &in) != MVT_OK ||
                 !(in.d2 <= self->cfg.numerics.gate_chi2)) {
                 continue;
             }
-            if (best < 0 || in.d2 < best_in.d2) {
+            /* an unexplained blob before one that tops another's body in a merged blob */
+            const uint8_t fb = best >= 0 ? self->body.free_det[j][best] : 0;
+            if (best < 0 || f < fb || (f == fb && in.d2 < best_in.d2)) {
                 best = e;
                 best_in = in;
             }
@@ -164,7 +208,7 @@ static void views_into(const mvt_tracker_t *self, const mvt_frame_t *frame, cons
         }
         const mvt_real lambda = mvt_body_clutter_density(self, j);
         cand->lo += MVT_LOG(MVT_R(1.0) - p + p * mvt_trk_density(&best_in) / lambda);
-        if (mvt_pkf_update(s, &best_in) == MVT_OK) {
+        if (iterated_update(&self->cams[j], &self->meas[j][best], &best_in, s) == MVT_OK) {
             cand->det[j] = (int16_t)best;
         }
     }
@@ -237,6 +281,14 @@ static int admissible(const mvt_tracker_t *self, const mvt_frame_t *frame, const
         if (cand->det[j] >= 0 && taken[j][cand->det[j]]) {
             return 0;
         }
+    }
+    int views = 0;
+    for (int j = 0; j < self->num_cameras; j++) {
+        views += cand->det[j] >= 0;
+    }
+    if (self->body.free_det[k][cand->det[k]] == 2 && views < 2) {
+        return 0; /* a merged blob's top is its track's displaced head as much as anyone's: one view
+                     does not tell them apart */
     }
     const mvt_real sep = MVT_R(2.0) * self->cfg.body.halfwidth_m;
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {

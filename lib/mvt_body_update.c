@@ -389,6 +389,38 @@ static mvt_real hosted(mvt_tracker_t *self, mvt_track_t *tr, const mvt_view_t *v
     return llr;
 }
 
+/* A blob that holds the body's predicted head and is wider than its silhouette by half a body or
+ * more holds someone else as well (a merged blob): where its top is not this body's head (beyond
+ * the gate), it is that other person's, who may be a newcomer nobody tracks yet (mvt_body_birth.c
+ * seeds from it). A burst, a whole silhouette displaced, is one body wide; another person's own
+ * blob does not hold this head. */
+static int merged_with(const mvt_real sil[4], const mvt_real head[2], const mvt_real box[4])
+{
+    const mvt_real w = sil[2] - sil[0];
+    return w > MVT_R(0.0) && mvt_trk_box_ok(box) && box[2] - box[0] > MVT_R(1.5) * w &&
+           mvt_trk_in_box(box, head, MVT_R(0.0), MVT_R(0.0));
+}
+
+/* Blob d's top is a tracked person's: inside the gate of a track other than t likely present (that
+ * person's head), or on a likely-present body's silhouette below its head (a piece of it, where the
+ * segmentation cut the merged region). Either way no newcomer's head. */
+static int tracked_top(const mvt_tracker_t *self, const mvt_view_t *view, int k, int d, int t)
+{
+    const mvt_real uv[2] = {view->det[d].u, view->det[d].v};
+    for (int j = 0; j < MVT_MAX_TARGETS; j++) {
+        mvt_pkf_innov_t in;
+        if (self->tracks[j].id == 0 || !self->pred_ok[j] || !(self->tracks[j].exist_lo > MVT_R(0.0))) {
+            continue;
+        }
+        if (mvt_body_fragment_of(self->body.axis[k][j], uv) ||
+            (j != t && mvt_pkf_innovation_from(&self->pred[j], &self->meas[k][d], NULL, &in) == MVT_OK &&
+             in.d2 <= self->cfg.numerics.gate_chi2)) {
+            return 1;
+        }
+    }
+    return 0;
+}
+
 /* Camera k updated track t's head; it placed it unless the motion model judged the head displaced. */
 static void mark_placed(mvt_track_t *tr, int k)
 {
@@ -482,6 +514,9 @@ void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_rea
             tr->exist_lo += MVT_LOG(MVT_R(1.0) - p + p * mvt_body_head_density(self, &in) / alt);
             if (!(in.d2 <= self->cfg.numerics.gate_chi2)) {
                 self->counters.gated_out++; /* displaced: evidence of the person, not of where */
+                if (merged_with(ws->sil[k][t], ws->head[t], view->det[d].box) && !tracked_top(self, view, k, d, t)) {
+                    self->body.free_det[k][d] = 2; /* a merged blob topped by someone else */
+                }
                 continue;
             }
             /* the head shows here with probability p / p_detect (mvt_body_shown); a blob at a head

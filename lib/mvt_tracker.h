@@ -451,7 +451,11 @@ typedef struct mvt_body_ws {
     uint8_t top_ok[MVT_MAX_TARGETS];    /* ... found */
     mvt_real frag_dens[MVT_MAX_DETECTIONS]; /* this camera: density (1/px^2) of the bodies' fragments
                                                at each blob's top */
-    uint8_t free_det[MVT_MAX_CAMERAS][MVT_MAX_DETECTIONS]; /* this frame: explained by no track */
+    uint8_t free_det[MVT_MAX_CAMERAS][MVT_MAX_DETECTIONS]; /* this frame: 1 explained by no track
+                                                              (clutter or a newcomer), 2 given to a
+                                                              track as its head beyond the gate (a
+                                                              merged blob topped by someone else);
+                                                              either may seed a birth */
     int16_t head_of[MVT_MAX_CAMERAS][MVT_MAX_DETECTIONS];  /* this frame: the track whose head the
                                                               blob is, or -1 */
     mvt_body_cand_t cand[MVT_MAX_BIRTH_CANDIDATES];
