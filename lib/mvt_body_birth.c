@@ -128,46 +128,6 @@ static void feet_into(const mvt_tracker_t *self, int k, const mvt_detection_t *d
     }
 }
 
-/* The candidate's update by a second view, iterated (Gauss-Newton on the prior and the blob): the
- * prior stretches metres along the seed's ray, and one linearisation there, far from the head the
- * two rays meet at, lands off it (a head 0.2 m above the height prior is a metre along a shallow
- * ray). in is the innovation at the prior; each pass relinearises at the last estimate,
- * y = z - h(x_i) - H_i (x_0 - x_i), and updates the prior with it. */
-#define UPDATE_PASSES 4
-static mvt_err_t iterated_update(const mvt_camera_t *cam, const mvt_pkf_meas_t *meas, const mvt_pkf_innov_t *in,
-                                 mvt_cv_state_t *s)
-{
-    const mvt_cv_state_t prior = *s;
-    mvt_cv_state_t post = prior;
-    mvt_err_t err = mvt_pkf_update(&post, in);
-    for (int it = 1; it < UPDATE_PASSES && err == MVT_OK; it++) {
-        mvt_cv_state_t at = prior;
-        for (int i = 0; i < 3; i++) {
-            at.x[i] = post.x[i];
-        }
-        mvt_pkf_pred_t pred;
-        mvt_pkf_innov_t rel;
-        if (mvt_pkf_predict_obs(&at, cam, MVT_PKF_JACOBIAN, &pred) != MVT_OK ||
-            mvt_pkf_innovation_from(&pred, meas, NULL, &rel) != MVT_OK) {
-            break; /* keep the last estimate */
-        }
-        for (int r = 0; r < 2; r++) {
-            for (int i = 0; i < 3; i++) {
-                rel.y[r] -= rel.H[r * 3 + i] * (prior.x[i] - post.x[i]);
-            }
-        }
-        mvt_cv_state_t next = prior;
-        if (mvt_pkf_update(&next, &rel) != MVT_OK) {
-            break;
-        }
-        post = next;
-    }
-    if (err == MVT_OK) {
-        *s = post;
-    }
-    return err;
-}
-
 /* Every observed camera but the seed's: its unexplained blob nearest the candidate's predicted head
  * inside the gate, or where there is none the nearest merged blob topped by someone other than the
  * track that took it (evidence 1 - p + p N / lambda, and the update), or the miss (1 - p). */
@@ -208,7 +168,7 @@ static void views_into(const mvt_tracker_t *self, const mvt_frame_t *frame, cons
         }
         const mvt_real lambda = mvt_body_clutter_density(self, j);
         cand->lo += MVT_LOG(MVT_R(1.0) - p + p * mvt_trk_density(&best_in) / lambda);
-        if (iterated_update(&self->cams[j], &self->meas[j][best], &best_in, s) == MVT_OK) {
+        if (mvt_pkf_update(s, &best_in) == MVT_OK) {
             cand->det[j] = (int16_t)best;
         }
     }
