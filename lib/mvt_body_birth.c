@@ -1,7 +1,10 @@
 /*
  * mvt_body_birth.c - new people from the blobs no track explains, from any number of views.
  *
- * Every unexplained blob (mvt_body_explain.c) seeds a candidate. Its head lies on the blob top's
+ * Every unexplained blob (mvt_body_explain.c) seeds a candidate, and so does a merged blob whose top
+ * is someone else's (mvt_body_update.c: a track's displaced head in a blob that holds its body and
+ * more, the top no tracked person's); such a candidate needs a second view, and other views' merged
+ * blobs join a candidate only where no unexplained blob does. Its head lies on the blob top's
  * ray; before anything else is known, at the height of a standing adult's head (body.head_height_m,
  * spread body.head_height_sd_m along the ray: the prior). The candidate is a small Kalman estimate that
  * takes, in turn:

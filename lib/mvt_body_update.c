@@ -4,7 +4,8 @@
  * State: the head that explain gave the track updates it (the PKF in the configured linearisation,
  * through the motion model) when it lies inside the chi-square gate; a displaced one (beyond the
  * gate, within the motion model's outlier radius) is evidence that the person is there, not of
- * where. A head the model expects another body to hide or merge (mvt_body_shown: it shows as a top
+ * where, and where its blob is merged with someone else's body (merged_with, tracked_top) its top
+ * may seed a birth. A head the model expects another body to hide or merge (mvt_body_shown: it shows as a top
  * of its own with probability p / p_detect) takes its blob with the motion model's prior of a
  * displaced point raised to 1 - (p / p_detect) (1 - p_outlier): such a blob's top is more often
  * where the nearer body's outline ends, or the merged region's, than the head. How often hidden
