@@ -5,10 +5,10 @@
  * through the motion model) when it lies inside the chi-square gate; a displaced one (beyond the
  * gate, within the motion model's outlier radius) is evidence that the person is there, not of
  * where, and where its blob is merged with someone else's body (merged_with, tracked_top) its top
- * may seed a birth. A head the model expects another body to hide or merge (mvt_body_shown: it shows as a top
- * of its own with probability p / p_detect) takes its blob with the motion model's prior of a
- * displaced point raised to 1 - (p / p_detect) (1 - p_outlier): such a blob's top is more often
- * where the nearer body's outline ends, or the merged region's, than the head. How often hidden
+ * may seed a birth. A head the model expects another body to hide or merge (mvt_body_shown: it
+ * shows as a top of its own with probability p / p_detect) takes its blob with the motion model's
+ * prior of a displaced point raised to 1 - (p / p_detect) (1 - p_outlier): such a blob's top is
+ * more often where the nearer body's outline ends, or the merged region's, than the head. How often hidden
  * heads still show is learnt per camera (learn_detection).
  * After every camera (mvt_body_one_view), a track whose head one camera alone placed this frame
  * takes that blob's feet where they are visible (mvt_body_feet_visible: not cut by the picture, no
