@@ -18,7 +18,9 @@
  * present takes it.
  * Merged blobs: a track left with neither whose predicted head lies in the box of a blob another
  * body explains (its head or its fragment tops it), under that top, and on the blob's foreground
- * where the camera sent its mask, may be inside that blob: the blob is its host.
+ * where the camera sent its mask, may be inside that blob: the blob is its host. Of several such
+ * blobs (neighbours' boxes overlap), the one holding most of its silhouette hosts it, whatever the
+ * order the camera lists them in.
  * Mask tops: a shown track with no blob for its head takes the mask's top in its own column as
  * its head where there is one (mask_head); one whose blob's top lies clearly below that top, within
  * a head's height, takes it too, and the blob is its piece under a cut.
@@ -31,6 +33,15 @@
 
 #include <math.h>
 #include <stddef.h>
+
+/* The area of silhouette sil (u0 v0 u1 v1) inside box b, px^2: of several blobs that may hold a
+ * body, the one holding most of it hosts it (blobs of people side by side overlap). */
+static mvt_real silhouette_inside(const mvt_real sil[4], const mvt_real b[4])
+{
+    const mvt_real w = (sil[2] < b[2] ? sil[2] : b[2]) - (sil[0] > b[0] ? sil[0] : b[0]);
+    const mvt_real hh = (sil[3] < b[3] ? sil[3] : b[3]) - (sil[1] > b[1] ? sil[1] : b[1]);
+    return w > MVT_R(0.0) && hh > MVT_R(0.0) ? w * hh : MVT_R(0.0);
+}
 
 /* Gains are offset by this constant to make the solver's costs non-negative (it forbids < 0). */
 #define GAIN_OFFSET MVT_R(1000.0)
@@ -203,12 +214,17 @@ void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k)
         }
         const mvt_real *h = ws->head[t];
         const mvt_real r_fg = MVT_R(3.0) * self->cams[k].sigma_px; /* the head's own pixels */
-        for (int d = 0; d < nd && ws->host[t] < 0; d++) {
+        mvt_real best = MVT_R(-1.0);
+        for (int d = 0; d < nd; d++) {
             const int o = ws->owner[d];
             const mvt_detection_t *det = &view->det[d];
             if (o >= 0 && o != t && self->tracks[o].exist_lo > MVT_R(0.0) && det->v <= h[1] &&
                 mvt_trk_in_box(det->box, h, MVT_R(0.0), MVT_R(0.0)) && (!masked || mvt_mask_fg_near(view->mask, h, r_fg))) {
-                ws->host[t] = (int16_t)d;
+                const mvt_real held = silhouette_inside(ws->sil[k][t], det->box);
+                if (held > best) {
+                    best = held;
+                    ws->host[t] = (int16_t)d;
+                }
             }
         }
     }
