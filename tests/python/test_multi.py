@@ -323,7 +323,7 @@ def test_daemon_newcomer_merged_with_a_tracked_person_born_at_once(tmp_path, dae
 
 @pytest.mark.daemon
 def test_daemon_person_hidden_in_merged_blobs_kept_whatever_the_blobs_order(tmp_path, daemon_path):
-    """Random rig 12 (5 cameras), crowd seed 1 (60 s): person 5, short, stands from about 20 s to
+    """Random rig 12 (5 cameras), crowd seed 1 (60 s): person 5, short, stands from about 16 s to
     the end beside taller people, and every view that sees them shows their head inside a blob
     another person tops; in one view two such blobs (two neighbours' overlapping boxes) hold it.
     The model keeps such a person from the blobs' extents. Which of two blobs holds a body must not
