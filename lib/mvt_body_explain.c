@@ -218,13 +218,14 @@ void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k)
         for (int d = 0; d < nd; d++) {
             const int o = ws->owner[d];
             const mvt_detection_t *det = &view->det[d];
-            if (o >= 0 && o != t && self->tracks[o].exist_lo > MVT_R(0.0) && det->v <= h[1] &&
-                mvt_trk_in_box(det->box, h, MVT_R(0.0), MVT_R(0.0)) && (!masked || mvt_mask_fg_near(view->mask, h, r_fg))) {
-                const mvt_real held = silhouette_inside(ws->sil[k][t], det->box);
-                if (held > best) {
-                    best = held;
-                    ws->host[t] = (int16_t)d;
-                }
+            if (o < 0 || o == t || !(self->tracks[o].exist_lo > MVT_R(0.0)) || det->v > h[1] ||
+                !mvt_trk_in_box(det->box, h, MVT_R(0.0), MVT_R(0.0))) {
+                continue;
+            }
+            const mvt_real held = silhouette_inside(ws->sil[k][t], det->box);
+            if (held > best && (!masked || mvt_mask_fg_near(view->mask, h, r_fg))) {
+                best = held;
+                ws->host[t] = (int16_t)d;
             }
         }
     }
