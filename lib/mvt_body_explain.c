@@ -213,7 +213,6 @@ void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k)
             continue; /* a track not yet likely present earns its existence from its own blobs */
         }
         const mvt_real *h = ws->head[t];
-        const mvt_real r_fg = MVT_R(3.0) * self->cams[k].sigma_px; /* the head's own pixels */
         mvt_real best = MVT_R(-1.0);
         for (int d = 0; d < nd; d++) {
             const int o = ws->owner[d];
@@ -223,10 +222,14 @@ void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k)
                 continue;
             }
             const mvt_real held = silhouette_inside(ws->sil[k][t], det->box);
-            if (held > best && (!masked || mvt_mask_fg_near(view->mask, h, r_fg))) {
+            if (held > best) {
                 best = held;
                 ws->host[t] = (int16_t)d;
             }
+        }
+        const mvt_real r_fg = MVT_R(3.0) * self->cams[k].sigma_px; /* the head's own pixels */
+        if (ws->host[t] >= 0 && masked && !mvt_mask_fg_near(view->mask, h, r_fg)) {
+            ws->host[t] = -1; /* the mask shows background at the head: no body hidden there */
         }
     }
     /* heads that stand out of the mask where no blob reports them; a blob given as a head whose top

@@ -8,8 +8,8 @@
  * may seed a birth. A head the model expects another body to hide or merge (mvt_body_shown: it
  * shows as a top of its own with probability p / p_detect) takes its blob with the motion model's
  * prior of a displaced point raised to 1 - (p / p_detect) (1 - p_outlier): such a blob's top is
- * more often where the nearer body's outline ends, or the merged region's, than the head. How often hidden
- * heads still show is learnt per camera (learn_detection).
+ * more often where the nearer body's outline ends, or the merged region's, than the head. How often
+ * hidden heads still show is learnt per camera (learn_detection).
  * After every camera (mvt_body_one_view), a track whose head one camera alone placed this frame
  * takes that blob's feet where they are visible (mvt_body_feet_visible: not cut by the picture, no
  * other body's silhouette on the blob, the head not judged displaced): the body's point on the
