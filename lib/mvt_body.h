@@ -33,6 +33,10 @@
  *                 clutter and other bodies' fragments), hosted (with the merged box's edges), missed with a fragment
  *                 of the body in view (no evidence), or missed; the camera's clutter rate,
  *                 detection probability and fragment rate are learnt
+ *   triangulate  kf only (MVT_FILTER_TRIANGULATE, the baseline): the heads the cameras placed,
+ *                triangulated, update the track as one point; the update step above then placed
+ *                heads without updating, and left the mask's tops, the hosts' edges and the feet
+ *                (per-view pixel measurements, the projective filter's) out
  *   one view     mvt_body_update.c: a track one camera alone placed takes its blob's visible feet;
  *                a track fewer than two placed keeps the person's height (the last two views gave)
  *   birth        mvt_body_birth.c: each unexplained blob is the seed of a candidate: its head ray
@@ -199,6 +203,7 @@ void mvt_body_existence(mvt_tracker_t *self, mvt_real dt);
 void mvt_body_visibility(mvt_tracker_t *self, const mvt_view_t *view, int k);
 void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k);
 void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_real dt);
+void mvt_body_triangulate(mvt_tracker_t *self);
 void mvt_body_one_view(mvt_tracker_t *self, const mvt_frame_t *frame);
 void mvt_body_birth(mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order, mvt_real dt);
 void mvt_body_prune(mvt_tracker_t *self);

@@ -38,6 +38,11 @@
  *                                                and each edge of the blob that its silhouette alone
  *                                                puts there measures that edge (host_edges)
  *   head missed                                   odds *= 1 - p
+ * The triangulate-then-KF baseline (--mode kf) runs the same lifecycle: its heads inside the gate
+ * are placed here and triangulated after every camera (mvt_body_triangulate: the robust inliers'
+ * linear least-squares point and first-order covariance, one 3D update), and the per-view pixel
+ * measurements (the mask's tops, a host's edges, the feet) are left out, so that the comparison
+ * with the projective filter isolates the estimator.
  * Cost O(T) updates; memory: none beyond the tracker.
  */
 #include "mvt_body.h"
@@ -127,7 +132,7 @@ void mvt_body_one_view(mvt_tracker_t *self, const mvt_frame_t *frame)
             learn_feet(self, tr, t, frame);
             continue;
         }
-        if (mvt_trk_popcount(tr->cameras_used) == 1) {
+        if (mvt_trk_popcount(tr->cameras_used) == 1 && self->cfg.filter == MVT_FILTER_PROJECTIVE) {
             feet_of_one_view(self, tr, t, frame);
         }
         if (tr->cameras_used != 0u && tr->was_shown) {
@@ -151,6 +156,60 @@ void mvt_body_one_view(mvt_tracker_t *self, const mvt_frame_t *frame)
         const mvt_real w = MVT_BODY_HEIGHT_BAND * MVT_SQRT(tr->seen_zz + MVT_BODY_HEAD_BOB_M * MVT_BODY_HEAD_BOB_M);
         const mvt_err_t err = mvt_trk_truncate(self, tr, Hz, tr->s.x[2], tr->seen_z - w, tr->seen_z + w);
         if (err != MVT_OK && err != MVT_ERR_NUMERIC) {
+            self->counters.numeric_faults++;
+        }
+    }
+}
+
+void mvt_body_triangulate(mvt_tracker_t *self)
+{
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        mvt_track_t *tr = &self->tracks[t];
+        if (tr->id == 0 || tr->dormant || mvt_trk_popcount(tr->cameras_placed) < 2) {
+            continue;
+        }
+        mvt_tri_obs_t obs[MVT_MAX_CAMERAS];
+        int n = 0;
+        for (int k = 0; k < self->num_cameras; k++) {
+            for (int d = 0; d < self->num_meas[k] && (tr->cameras_placed & (1u << k)); d++) {
+                if (self->body.head_of[k][d] == t) {
+                    obs[n].cam = k;
+                    obs[n].xn[0] = self->meas[k][d].xn[0];
+                    obs[n].xn[1] = self->meas[k][d].xn[1];
+                    obs[n].var_px2 = self->meas[k][d].var_px2;
+                    n++;
+                    break;
+                }
+            }
+        }
+        /* the views that agree within the heads' gate, then the linear least-squares point of
+         * those and its first-order covariance (the baseline of [10, 18]) */
+        if (n < 2) {
+            continue;
+        }
+        mvt_real x[3], cov[9];
+        uint32_t inl = 0u;
+        const mvt_real thr = MVT_SQRT(self->cfg.numerics.gate_chi2 * obs[0].var_px2);
+        if (mvt_tri_robust(self->cams, obs, n, thr, x, &inl, NULL) != MVT_OK) {
+            continue;
+        }
+        mvt_tri_obs_t in[MVT_MAX_CAMERAS];
+        int m = 0;
+        uint32_t bits = 0u;
+        for (int i = 0; i < n; i++) {
+            if (inl & (1u << i)) {
+                in[m++] = obs[i];
+                bits |= 1u << obs[i].cam;
+            }
+        }
+        if (mvt_tri_linear(self->cams, in, m, x) != MVT_OK || mvt_tri_covariance(self->cams, in, m, x, cov) != MVT_OK) {
+            continue;
+        }
+        if (mvt_trk_update_point(self, tr, x, cov) == MVT_OK) {
+            tr->cameras_used = bits;
+            tr->cameras_placed = bits;
+            self->counters.updates++;
+        } else {
             self->counters.numeric_faults++;
         }
     }
@@ -386,7 +445,9 @@ static mvt_real hosted(mvt_tracker_t *self, mvt_track_t *tr, const mvt_view_t *v
     }
     const edge_noise_t en = edge_noise(self, k, t, d);
     const mvt_real llr = extent_llr(&self->cams[k], b, sil_t, all, &en);
-    host_edges(self, tr, k, b, sil_t, all, &en);
+    if (self->cfg.filter == MVT_FILTER_PROJECTIVE) {
+        host_edges(self, tr, k, b, sil_t, all, &en);
+    }
     return llr;
 }
 
@@ -483,7 +544,7 @@ void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_rea
         }
         const mvt_real p = ws->pd[t];
         const int d = ws->assign[t];
-        if (d < 0 && ws->top_ok[t]) {
+        if (d < 0 && ws->top_ok[t] && self->cfg.filter == MVT_FILTER_PROJECTIVE) {
             /* the head stands out of the mask in its own column: placed, and present */
             mvt_pkf_innov_t in;
             if (mvt_pkf_innovation_from(&self->pred[t], &ws->top[t], NULL, &in) != MVT_OK ||
@@ -524,14 +585,18 @@ void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_rea
              * the model expects hidden is more likely another part of the body (its top where the
              * nearer body's outline ends, or the merged region's) */
             const mvt_real pk = self->p_detect_k[k];
-            err = mvt_trk_update_head(self, tr, k, &in, NULL, pk > MVT_R(0.0) && p < pk ? p / pk : MVT_R(1.0));
+            if (self->cfg.filter == MVT_FILTER_PROJECTIVE) {
+                err = mvt_trk_update_head(self, tr, k, &in, NULL, pk > MVT_R(0.0) && p < pk ? p / pk : MVT_R(1.0));
+            }
         }
         if (err != MVT_OK) {
             self->counters.numeric_faults++;
             continue;
         }
         mark_placed(tr, k);
-        self->counters.updates++;
+        if (self->cfg.filter == MVT_FILTER_PROJECTIVE) {
+            self->counters.updates++; /* kf: mvt_body_triangulate, after every camera */
+        }
         const mvt_detection_t *det = &view->det[d];
         if (self->chroma_ok[k][d] && mvt_trk_box_ok(det->box) && alone_in_blob(self, k, t, det->box)) {
             mvt_trk_app_update(&tr->app, self->chroma[k][d]);

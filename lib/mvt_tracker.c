@@ -338,7 +338,7 @@ mvt_err_t mvt_tracker_step(mvt_tracker_t *self, const mvt_frame_t *frame, mvt_ou
     }
     const mvt_real dt = self->have_time ? mvt_us_to_s(frame->utime_us - self->last_utime_us) : MVT_R(0.0);
     const mvt_real forget = MVT_EXP(-dt / MVT_TRK_NEED_MEMORY_S);
-    const int body = self->cfg.lifecycle == MVT_LIFECYCLE_BODY && self->cfg.filter == MVT_FILTER_PROJECTIVE;
+    const int body = self->cfg.lifecycle == MVT_LIFECYCLE_BODY;
     if (!body) {
         mvt_trk_existence(self, dt);
     }

@@ -23,6 +23,8 @@ static mvt_camera_t g_cams[5];
 static mvt_detection_t g_flood[512];
 /* The lifecycle the tests below run with (init, and the one-camera-reach test's own). */
 static mvt_lifecycle_t g_lifecycle = MVT_LIFECYCLE_RULES;
+/* ... and the estimator (the triangulate-then-KF baseline runs some of them again) */
+static mvt_filter_t g_filter = MVT_FILTER_PROJECTIVE;
 
 static void init(void)
 {
@@ -30,6 +32,7 @@ static void init(void)
     mvt_tracker_config_t cfg;
     mvt_tracker_config_default(&cfg);
     cfg.lifecycle = g_lifecycle;
+    cfg.filter = g_filter;
     cfg.volume.min[0] = 0; cfg.volume.min[1] = 0; cfg.volume.min[2] = 0;
     cfg.volume.max[0] = 6; cfg.volume.max[1] = 5; cfg.volume.max[2] = 2.5f;
     assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, g_cams, 5), MVT_OK);
@@ -1658,6 +1661,27 @@ WITH_BODY(test_mvt_tracker_step_more_people_than_capacity_births_refused_counted
 WITH_BODY(test_mvt_tracker_step_person_returns_new_identity)
 WITH_BODY(test_mvt_tracker_step_queue_hidden_kept_while_box_needs_them)
 
+/* ... and with the triangulate-then-KF baseline (--mode kf), which runs the body model's lifecycle
+ * with a triangulated point for the projective filter's per-view heads. Not the merged pair or the
+ * hidden queue: a head that no view shows as a blob's top is kept by the edges of the blob that
+ * hosts it, a per-view pixel measurement, the projective filter's (mvt_body_update.c). */
+#define WITH_BODY_KF(test)                    \
+    static void test##_body_kf(void **state)  \
+    {                                         \
+        g_lifecycle = MVT_LIFECYCLE_BODY;     \
+        g_filter = MVT_FILTER_TRIANGULATE;    \
+        test(state);                          \
+        g_lifecycle = MVT_LIFECYCLE_RULES;    \
+        g_filter = MVT_FILTER_PROJECTIVE;     \
+    }
+WITH_BODY_KF(test_mvt_tracker_step_two_people_crossing_keep_identities)
+WITH_BODY_KF(test_mvt_tracker_step_coasting_track_does_not_take_passer_by)
+WITH_BODY_KF(test_mvt_tracker_step_lost_tracks_reacquired_by_height)
+WITH_BODY_KF(test_mvt_tracker_step_close_pair_both_kept)
+WITH_BODY_KF(test_mvt_tracker_step_false_alarm_flood_confirmed_tracks_survive)
+WITH_BODY_KF(test_mvt_tracker_step_more_people_than_capacity_births_refused_counted)
+WITH_BODY_KF(test_mvt_tracker_step_person_returns_new_identity)
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1697,6 +1721,13 @@ int main(void)
         cmocka_unit_test(test_mvt_tracker_step_more_people_than_capacity_births_refused_counted_body),
         cmocka_unit_test(test_mvt_tracker_step_person_returns_new_identity_body),
         cmocka_unit_test(test_mvt_tracker_step_queue_hidden_kept_while_box_needs_them_body),
+        cmocka_unit_test(test_mvt_tracker_step_two_people_crossing_keep_identities_body_kf),
+        cmocka_unit_test(test_mvt_tracker_step_coasting_track_does_not_take_passer_by_body_kf),
+        cmocka_unit_test(test_mvt_tracker_step_lost_tracks_reacquired_by_height_body_kf),
+        cmocka_unit_test(test_mvt_tracker_step_close_pair_both_kept_body_kf),
+        cmocka_unit_test(test_mvt_tracker_step_false_alarm_flood_confirmed_tracks_survive_body_kf),
+        cmocka_unit_test(test_mvt_tracker_step_more_people_than_capacity_births_refused_counted_body_kf),
+        cmocka_unit_test(test_mvt_tracker_step_person_returns_new_identity_body_kf),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
