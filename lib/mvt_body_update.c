@@ -182,34 +182,18 @@ void mvt_body_triangulate(mvt_tracker_t *self)
                 }
             }
         }
-        /* the views that agree within the heads' gate, then the linear least-squares point of
-         * those and its first-order covariance (the baseline of [10, 18]) */
         if (n < 2) {
             continue;
         }
-        mvt_real x[3], cov[9];
-        uint32_t inl = 0u;
-        const mvt_real thr = MVT_SQRT(self->cfg.numerics.gate_chi2 * obs[0].var_px2);
-        if (mvt_tri_robust(self->cams, obs, n, thr, x, &inl, NULL) != MVT_OK) {
-            continue;
-        }
-        mvt_tri_obs_t in[MVT_MAX_CAMERAS];
-        int m = 0;
+        /* the views that agree within the heads' gate */
         uint32_t bits = 0u;
-        for (int i = 0; i < n; i++) {
-            if (inl & (1u << i)) {
-                in[m++] = obs[i];
-                bits |= 1u << obs[i].cam;
-            }
-        }
-        if (mvt_tri_linear(self->cams, in, m, x) != MVT_OK || mvt_tri_covariance(self->cams, in, m, x, cov) != MVT_OK) {
-            continue;
-        }
-        if (mvt_trk_update_point(self, tr, x, cov) == MVT_OK) {
+        const mvt_err_t err =
+            mvt_trk_update_triangulated(self, tr, obs, n, MVT_SQRT(self->cfg.numerics.gate_chi2 * obs[0].var_px2), &bits);
+        if (err == MVT_OK) {
             tr->cameras_used = bits;
             tr->cameras_placed = bits;
             self->counters.updates++;
-        } else {
+        } else if (err != MVT_ERR_DEGENERATE) {
             self->counters.numeric_faults++;
         }
     }

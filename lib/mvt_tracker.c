@@ -269,30 +269,14 @@ static void step_triangulate(mvt_tracker_t *self, const mvt_frame_t *frame, cons
         if (n < 2) {
             continue;
         }
-        mvt_real x[3], cov[9];
-        uint32_t inl = 0;
         const mvt_real thr = c->rules.birth_reproj_sigma * MVT_SQRT(obs[0].var_px2);
-        if (mvt_tri_robust(self->cams, obs, n, thr > c->rules.birth_min_reproj_px ? thr : c->rules.birth_min_reproj_px, x, &inl,
-                           NULL) != MVT_OK) {
-            continue;
-        }
-        mvt_tri_obs_t in[MVT_MAX_CAMERAS];
-        int m = 0;
-        uint32_t used_bits = 0;
-        for (int i = 0; i < n; i++) {
-            if (inl & (1u << i)) {
-                in[m++] = obs[i];
-                used_bits |= 1u << obs[i].cam;
-            }
-        }
-        /* the baseline of [10, 18]: the linear least-squares point, first-order covariance */
-        if (mvt_tri_linear(self->cams, in, m, x) != MVT_OK || mvt_tri_covariance(self->cams, in, m, x, cov) != MVT_OK) {
-            continue;
-        }
-        if (mvt_trk_update_point(self, tr, x, cov) == MVT_OK) {
+        uint32_t used_bits = 0u;
+        const mvt_err_t err = mvt_trk_update_triangulated(
+            self, tr, obs, n, thr > c->rules.birth_min_reproj_px ? thr : c->rules.birth_min_reproj_px, &used_bits);
+        if (err == MVT_OK) {
             tr->cameras_used |= used_bits;
             self->counters.updates++;
-        } else {
+        } else if (err != MVT_ERR_DEGENERATE) {
             self->counters.numeric_faults++;
         }
     }

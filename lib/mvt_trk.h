@@ -249,6 +249,13 @@ mvt_err_t mvt_trk_update_head(mvt_tracker_t *self, mvt_track_t *tr, int k, const
                               const mvt_real *extra_px2, mvt_real shown);
 void mvt_trk_settle(mvt_tracker_t *self, mvt_track_t *tr);
 mvt_err_t mvt_trk_update_point(mvt_tracker_t *self, mvt_track_t *tr, const mvt_real z[3], const mvt_real R[9]);
+/* The triangulate-then-KF baseline's update (the paper's references [10, 18]): the views of obs
+ * (n >= 2) that agree within thresh_px (mvt_tri_robust), their linear least-squares point and its
+ * first-order covariance as one 3D measurement. *used: the inliers' camera bits. MVT_ERR_DEGENERATE
+ * when no point comes of the views (fewer than two agree, parallel rays, behind a camera: nothing
+ * changed); else the update's own error. */
+mvt_err_t mvt_trk_update_triangulated(mvt_tracker_t *self, mvt_track_t *tr, const mvt_tri_obs_t *obs, int n,
+                                      mvt_real thresh_px, uint32_t *used);
 /* A whole (not position-only) update with a pixel innovation of any H on the position, without a
  * view's memory of displacement (the feet). */
 mvt_err_t mvt_trk_update_pixels(mvt_tracker_t *self, mvt_track_t *tr, const mvt_pkf_innov_t *in);

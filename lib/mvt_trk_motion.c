@@ -114,6 +114,32 @@ mvt_err_t mvt_trk_update_point(mvt_tracker_t *self, mvt_track_t *tr, const mvt_r
     return mvt_imm_update(&tr->imm, &self->cfg.motion, 3, eye3, y, R, &tr->s);
 }
 
+mvt_err_t mvt_trk_update_triangulated(mvt_tracker_t *self, mvt_track_t *tr, const mvt_tri_obs_t *obs, int n,
+                                      mvt_real thresh_px, uint32_t *used)
+{
+    mvt_real x[3], cov[9];
+    uint32_t inl = 0u;
+    *used = 0u;
+    if (mvt_tri_robust(self->cams, obs, n, thresh_px, x, &inl, NULL) != MVT_OK) {
+        return MVT_ERR_DEGENERATE;
+    }
+    mvt_tri_obs_t in[MVT_MAX_CAMERAS];
+    int m = 0;
+    uint32_t bits = 0u;
+    for (int i = 0; i < n; i++) {
+        if (inl & (1u << i)) {
+            in[m++] = obs[i];
+            bits |= 1u << obs[i].cam;
+        }
+    }
+    if (mvt_tri_linear(self->cams, in, m, x) != MVT_OK || mvt_tri_covariance(self->cams, in, m, x, cov) != MVT_OK) {
+        return MVT_ERR_DEGENERATE;
+    }
+    const mvt_err_t err = mvt_trk_update_point(self, tr, x, cov);
+    *used = err == MVT_OK ? bits : 0u;
+    return err;
+}
+
 mvt_err_t mvt_trk_truncate(mvt_tracker_t *self, mvt_track_t *tr, const mvt_real H[3], mvt_real value, mvt_real lo,
                            mvt_real hi)
 {
