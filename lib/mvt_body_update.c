@@ -171,7 +171,10 @@ void mvt_body_triangulate(mvt_tracker_t *self)
         mvt_tri_obs_t obs[MVT_MAX_CAMERAS];
         int n = 0;
         for (int k = 0; k < self->num_cameras; k++) {
-            for (int d = 0; d < self->num_meas[k] && (tr->cameras_placed & (1u << k)); d++) {
+            if (!(tr->cameras_placed & (1u << k))) {
+                continue;
+            }
+            for (int d = 0; d < self->num_meas[k]; d++) {
                 if (self->body.head_of[k][d] == t) {
                     obs[n].cam = k;
                     obs[n].xn[0] = self->meas[k][d].xn[0];
@@ -521,6 +524,8 @@ void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_rea
     learn_detection(self, k, dt);
     const mvt_body_ws_t *ws = &self->body;
     const mvt_real lambda = mvt_body_clutter_density(self, k);
+    /* the projective filter updates here; kf places the heads for mvt_body_triangulate */
+    const int projective = self->cfg.filter == MVT_FILTER_PROJECTIVE;
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         mvt_track_t *tr = &self->tracks[t];
         if (tr->id == 0 || tr->dormant) {
@@ -528,7 +533,7 @@ void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_rea
         }
         const mvt_real p = ws->pd[t];
         const int d = ws->assign[t];
-        if (d < 0 && ws->top_ok[t] && self->cfg.filter == MVT_FILTER_PROJECTIVE) {
+        if (d < 0 && ws->top_ok[t] && projective) {
             /* the head stands out of the mask in its own column: placed, and present */
             mvt_pkf_innov_t in;
             if (mvt_pkf_innovation_from(&self->pred[t], &ws->top[t], NULL, &in) != MVT_OK ||
@@ -569,7 +574,7 @@ void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_rea
              * the model expects hidden is more likely another part of the body (its top where the
              * nearer body's outline ends, or the merged region's) */
             const mvt_real pk = self->p_detect_k[k];
-            if (self->cfg.filter == MVT_FILTER_PROJECTIVE) {
+            if (projective) {
                 err = mvt_trk_update_head(self, tr, k, &in, NULL, pk > MVT_R(0.0) && p < pk ? p / pk : MVT_R(1.0));
             }
         }
@@ -578,8 +583,8 @@ void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_rea
             continue;
         }
         mark_placed(tr, k);
-        if (self->cfg.filter == MVT_FILTER_PROJECTIVE) {
-            self->counters.updates++; /* kf: mvt_body_triangulate, after every camera */
+        if (projective) {
+            self->counters.updates++; /* kf's: mvt_body_triangulate, after every camera */
         }
         const mvt_detection_t *det = &view->det[d];
         if (self->chroma_ok[k][d] && mvt_trk_box_ok(det->box) && alone_in_blob(self, k, t, det->box)) {
