@@ -78,6 +78,15 @@
  * floor up to MVT_BODY_P_SHOWN_HIDDEN_MAX. */
 #define MVT_BODY_P_SHOWN_HIDDEN MVT_R(0.02)
 #define MVT_BODY_P_SHOWN_HIDDEN_MAX MVT_R(0.9)
+/* The probability that a camera's foreground mask shows background all around a visible head of a
+ * person who is there (clothes and hair the colour of the background behind them, a segmentation
+ * that lost the person): a head missed where the mask is empty weighs this, not the plain miss's
+ * 1 - p, against the person. Learnt per camera from the heads of people two other views placed the
+ * frame before (running mean over MVT_BODY_PD_S), from this prior, which is also its floor (a
+ * mask is never trusted more than that), up to MVT_BODY_P_BG_MAX. */
+#define MVT_BODY_P_BG MVT_R(0.01)
+#define MVT_BODY_P_BG_MIN MVT_BODY_P_BG
+#define MVT_BODY_P_BG_MAX MVT_R(0.5)
 /* A blob's lowest point is the body's point on the floor nearest the camera: this far (m) from the
  * head's vertical toward the camera. Legs and feet are narrower than shoulders, so for a standing
  * or walking person it is less than the body's half width. Learnt per camera from the feet of
@@ -201,6 +210,10 @@ mvt_real mvt_body_head_density(const mvt_tracker_t *self, const mvt_pkf_innov_t 
 /* The steps (see above). */
 void mvt_body_existence(mvt_tracker_t *self, mvt_real dt);
 void mvt_body_visibility(mvt_tracker_t *self, const mvt_view_t *view, int k);
+
+/* Camera k's mask (where it sent one) shows background all around the head predicted at p (within
+ * half a head's width, three of the detector's sigmas and two of the prediction's spreads). */
+int mvt_body_head_on_background(const mvt_tracker_t *self, const mvt_view_t *view, int k, const mvt_pkf_pred_t *p);
 void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k);
 void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_real dt);
 void mvt_body_triangulate(mvt_tracker_t *self);

@@ -22,8 +22,10 @@
  * blob 1 - p + p N / lambda (N the density of the blob under the candidate, which before a second
  * view is spread along the projected ray: the epipolar line's length counts against the
  * coincidence), a miss 1 - p (p the view's detection probability, lowered where a tracked body
- * covers the head). So a fragment (its feet say its top is no head's height), a false blob that
- * the other views do not see, or two unrelated blobs that meet at some height, stay unborn, while
+ * covers the head), or where the view's mask shows background all around the head, the camera's
+ * rate of that for people there (MVT_BODY_P_BG). So a fragment (its feet say its top is no head's
+ * height), a false blob that the other views do not see, or two unrelated blobs that meet at some
+ * height where other views' masks are empty, stay unborn, while
  * a person seen by one camera alone is born from their first frames.
  * Candidates are born best first while their existence is above population.exist_delete, each blob used once,
  * never inside a body already there (two bodies cannot overlap: 2 body.halfwidth_m apart at least),
@@ -166,7 +168,8 @@ static void views_into(const mvt_tracker_t *self, const mvt_frame_t *frame, cons
             }
         }
         if (best < 0) {
-            cand->lo += MVT_LOG(MVT_R(1.0) - p);
+            /* the mask is empty where the head would be: the camera's rate of that for people there */
+            cand->lo += MVT_LOG(mvt_body_head_on_background(self, &frame->views[j], j, &pred) ? self->p_bg_k[j] : MVT_R(1.0) - p);
             continue;
         }
         const mvt_real lambda = mvt_body_clutter_density(self, j);

@@ -37,6 +37,10 @@
  *                                                the head's column stays between the blob's sides,
  *                                                and each edge of the blob that its silhouette alone
  *                                                puts there measures that edge (host_edges)
+ *   head missed where the mask shows background   odds *= the camera's learnt rate of visible heads
+ *   all around it (mvt_body_head_on_background)   of people there on its mask's background
+ *                                                (MVT_BODY_P_BG): a mask is dense evidence, a
+ *                                                missing blob top is not
  *   head missed                                   odds *= 1 - p
  * The triangulate-then-KF baseline (--mode kf) runs the same lifecycle: its heads inside the gate
  * are placed here and triangulated after every camera (mvt_body_triangulate: the robust inliers'
@@ -46,6 +50,8 @@
  * Cost O(T) updates; memory: none beyond the tracker.
  */
 #include "mvt_body.h"
+
+#include "mvt_mask.h"
 
 #include <math.h>
 #include <stddef.h>
@@ -482,12 +488,21 @@ static void mark_placed(mvt_track_t *tr, int k)
 /* Learns camera k's detection probability from this frame: each track likely present whose head
  * the model expects to be shown (no body over it) is a trial, its head's blob a hit. The tracks
  * whose heads it expects hidden (mvt_body_shown) are trials of the rate at which hidden heads still
- * show, per p_detect. */
-static void learn_detection(mvt_tracker_t *self, int k, mvt_real dt)
+ * show, per p_detect. Where the camera sent its mask, the heads in view and not hidden of people two
+ * other views placed the frame before are trials of the rate at which the mask shows background all
+ * around a head that is there (p_bg_k). */
+static void learn_detection(mvt_tracker_t *self, int k, int masked, mvt_real dt)
 {
     const mvt_body_ws_t *ws = &self->body;
-    int n = 0, hits = 0, n_hidden = 0, hits_hidden = 0;
+    int n = 0, hits = 0, n_hidden = 0, hits_hidden = 0, n_bg = 0, hits_bg = 0;
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        /* the mask's trials: heads in view, not hidden, of people two other views placed */
+        const mvt_track_t *tr = &self->tracks[t];
+        if (tr->id != 0 && mvt_trk_popcount(tr->cameras_placed_prev & ~(1u << k)) >= 2 && ws->pd[t] > MVT_R(0.0) &&
+            (ws->on_bg[t] || ws->pd[t] > MVT_R(0.5) * self->p_detect_k[k]) && masked) {
+            n_bg++;
+            hits_bg += ws->on_bg[t];
+        }
         if (self->tracks[t].id == 0 || !(self->tracks[t].exist_lo > MVT_R(0.0)) || !(ws->pd[t] > MVT_R(0.0))) {
             continue;
         }
@@ -510,6 +525,12 @@ static void learn_detection(mvt_tracker_t *self, int k, mvt_real dt)
                                         : (q > MVT_BODY_P_SHOWN_HIDDEN_MAX ? MVT_BODY_P_SHOWN_HIDDEN_MAX : q);
         self->p_hidden_k[k] = q;
     }
+    if (n_bg > 0) {
+        const mvt_real a = MVT_R(1.0) - MVT_EXP(-dt * (mvt_real)n_bg / MVT_BODY_PD_S);
+        mvt_real q = self->p_bg_k[k] + a * ((mvt_real)hits_bg / (mvt_real)n_bg - self->p_bg_k[k]);
+        q = q < MVT_BODY_P_BG_MIN ? MVT_BODY_P_BG_MIN : (q > MVT_BODY_P_BG_MAX ? MVT_BODY_P_BG_MAX : q);
+        self->p_bg_k[k] = q;
+    }
     if (n == 0) {
         return;
     }
@@ -521,7 +542,7 @@ static void learn_detection(mvt_tracker_t *self, int k, mvt_real dt)
 
 void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_real dt)
 {
-    learn_detection(self, k, dt);
+    learn_detection(self, k, view->mask != NULL && view->mask->width > 0, dt);
     const mvt_body_ws_t *ws = &self->body;
     const mvt_real lambda = mvt_body_clutter_density(self, k);
     /* the projective filter updates here; kf places the heads for mvt_body_triangulate */
@@ -551,6 +572,8 @@ void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_rea
                 tr->exist_lo += MVT_LOG(MVT_R(1.0) - p * MVT_BODY_P_SHOWN_HIDDEN) + hosted(self, tr, view, k, t, ws->host[t]);
             } else if (ws->frag[t] >= 0) {
                 keep_in_blob(self, tr, k, &view->det[ws->frag[t]]); /* the piece holds the body's column */
+            } else if (ws->on_bg[t]) {
+                tr->exist_lo += MVT_LOG(self->p_bg_k[k]); /* the mask is empty where the head would be */
             } else {
                 tr->exist_lo += MVT_LOG(MVT_R(1.0) - p);
             }

@@ -9,7 +9,8 @@
  * mvt_body_shown). A head outside the picture, or behind the camera, is
  * not reported at all. Where the camera sent its foreground mask and the mask holds nothing near
  * the predicted head, nothing hides the head there (a body in front of it, or one it merged with,
- * would be foreground): it is not hidden, and is reported with p_detect.
+ * would be foreground): it is not hidden, and is reported with p_detect; that it is missed there
+ * weighs the camera's rate of empty masks at heads of people there (mvt_body_update.c).
  */
 #include "mvt_body.h"
 
@@ -33,19 +34,16 @@ mvt_real mvt_body_shown(const mvt_tracker_t *self, int k, const mvt_real axis[MV
     return shown;
 }
 
-/* Camera k's mask shows background all around track t's predicted head (within half a head's width
- * and its spread): nothing hides it. */
-static int head_on_background(const mvt_tracker_t *self, const mvt_view_t *view, int k, int t)
+int mvt_body_head_on_background(const mvt_tracker_t *self, const mvt_view_t *view, int k, const mvt_pkf_pred_t *p)
 {
-    if (view->mask == NULL || view->mask->width < 1) {
+    if (view->mask == NULL || view->mask->width < 1 || !(p->depth_m > MVT_R(0.0))) {
         return 0;
     }
     const mvt_camera_t *cam = &self->cams[k];
-    const mvt_pkf_pred_t *p = &self->pred[t];
     const mvt_real s2 = p->hph[0] > p->hph[2] ? p->hph[0] : p->hph[2];
     const mvt_real r = MVT_R(3.0) * cam->sigma_px + MVT_R(2.0) * MVT_SQRT(s2) +
                        cam->fx * MVT_TRK_HEAD_HALFWIDTH_M / p->depth_m;
-    return !mvt_mask_fg_near(view->mask, self->body.head[t], r);
+    return !mvt_mask_fg_near(view->mask, p->h, r);
 }
 
 void mvt_body_visibility(mvt_tracker_t *self, const mvt_view_t *view, int k)
@@ -55,6 +53,9 @@ void mvt_body_visibility(mvt_tracker_t *self, const mvt_view_t *view, int k)
     }
     if (!(self->p_hidden_k[k] > MVT_R(0.0))) {
         self->p_hidden_k[k] = MVT_BODY_P_SHOWN_HIDDEN; /* the prior */
+    }
+    if (!(self->p_bg_k[k] > MVT_R(0.0))) {
+        self->p_bg_k[k] = MVT_BODY_P_BG; /* the prior */
     }
     const mvt_camera_t *cam = &self->cams[k];
     mvt_body_ws_t *ws = &self->body;
@@ -87,7 +88,8 @@ void mvt_body_visibility(mvt_tracker_t *self, const mvt_view_t *view, int k)
         }
     }
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
-        if (ws->pd[t] > MVT_R(0.0) && !head_on_background(self, view, k, t)) {
+        ws->on_bg[t] = (uint8_t)(ws->pd[t] > MVT_R(0.0) && mvt_body_head_on_background(self, view, k, &self->pred[t]));
+        if (ws->pd[t] > MVT_R(0.0) && !ws->on_bg[t]) {
             ws->pd[t] *= mvt_body_shown(self, k, ws->axis[k][t], t);
         }
     }

@@ -449,6 +449,8 @@ typedef struct mvt_body_ws {
     mvt_pkf_meas_t top[MVT_MAX_TARGETS]; /* this camera: the head as a top of the foreground mask in
                                             its own column, where no blob is its head */
     uint8_t top_ok[MVT_MAX_TARGETS];    /* ... found */
+    uint8_t on_bg[MVT_MAX_TARGETS];     /* this camera: its mask shows background all around the
+                                           predicted head (mvt_body_vis.c) */
     mvt_real frag_dens[MVT_MAX_DETECTIONS]; /* this camera: density (1/px^2) of the bodies' fragments
                                                at each blob's top */
     uint8_t free_det[MVT_MAX_CAMERAS][MVT_MAX_DETECTIONS]; /* this frame: 1 explained by no track
@@ -547,6 +549,9 @@ typedef struct mvt_tracker {
                                              (mvt_body_update.c); 0: not yet */
     mvt_real frag_n[MVT_MAX_CAMERAS];     /* ... and the fragments it shows per body likely present
                                              per frame, learnt (mvt_body.c); 0: not yet */
+    mvt_real p_bg_k[MVT_MAX_CAMERAS];     /* ... and the chance that its mask shows background all
+                                             around a visible head, learnt (mvt_body_update.c); 0: not
+                                             yet */
     mvt_real frame_dt_s;                  /* MVT_LIFECYCLE_BODY: the typical time between frames, s
                                              (mvt_body.c); 0: not yet. Not persisted */
     mvt_body_ws_t body;         /* MVT_LIFECYCLE_BODY's workspace */
@@ -593,6 +598,7 @@ typedef struct mvt_tracker_persist {
     mvt_real p_hidden_k[MVT_MAX_CAMERAS];
     mvt_real foot_ahead_k[MVT_MAX_CAMERAS];
     mvt_real frag_n[MVT_MAX_CAMERAS];
+    mvt_real p_bg_k[MVT_MAX_CAMERAS];
 } mvt_tracker_persist_t;
 
 /* Copies the persistent part of the tracker into out (padding zeroed: equal states give equal

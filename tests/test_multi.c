@@ -1660,6 +1660,7 @@ WITH_BODY(test_mvt_tracker_step_false_alarm_flood_confirmed_tracks_survive)
 WITH_BODY(test_mvt_tracker_step_more_people_than_capacity_births_refused_counted)
 WITH_BODY(test_mvt_tracker_step_person_returns_new_identity)
 WITH_BODY(test_mvt_tracker_step_queue_hidden_kept_while_box_needs_them)
+WITH_BODY(test_mvt_tracker_step_ghost_in_boxes_refuted_by_masks)
 
 /* ... and with the triangulate-then-KF baseline (--mode kf), which runs the body model's lifecycle
  * with a triangulated point for the projective filter's per-view heads. Not the merged pair or the
@@ -1721,6 +1722,7 @@ int main(void)
         cmocka_unit_test(test_mvt_tracker_step_more_people_than_capacity_births_refused_counted_body),
         cmocka_unit_test(test_mvt_tracker_step_person_returns_new_identity_body),
         cmocka_unit_test(test_mvt_tracker_step_queue_hidden_kept_while_box_needs_them_body),
+        cmocka_unit_test(test_mvt_tracker_step_ghost_in_boxes_refuted_by_masks_body),
         cmocka_unit_test(test_mvt_tracker_step_two_people_crossing_keep_identities_body_kf),
         cmocka_unit_test(test_mvt_tracker_step_coasting_track_does_not_take_passer_by_body_kf),
         cmocka_unit_test(test_mvt_tracker_step_lost_tracks_reacquired_by_height_body_kf),
