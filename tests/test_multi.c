@@ -844,25 +844,33 @@ static void test_mvt_tracker_step_person_lost_and_back_keeps_identity(void **sta
     const mvt_real near_same[3] = {3.2f, 2.7f, 1.76f};
     const int32_t back = lost_and_born(near_same, 2.4, 2.0f, 3.0f, &was);
     assert_int_equal(back, was);
-    assert_int_equal(g_tracker.counters.identities_recovered, 1);
-    assert_true(g_tracker.counters.deleted_unseen == 1);
-    /* the same with recovery off: a new identity */
-    assert_true(lost_and_born(near_same, 2.4, 2.0f, 0.0f, &was) > 0 && g_new > was);
+    const int rules = g_lifecycle == MVT_LIFECYCLE_RULES;
+    if (rules) {
+        assert_int_equal(g_tracker.counters.identities_recovered, 1);
+        assert_true(g_tracker.counters.deleted_unseen == 1);
+        /* the same with recovery off: a new identity */
+        assert_true(lost_and_born(near_same, 2.4, 2.0f, 0.0f, &was) > 0 && g_new > was);
+    }
     /* 0.3 m shorter at the same place: another person */
     const mvt_real shorter[3] = {3.1f, 2.6f, 1.45f};
     assert_true(lost_and_born(shorter, 2.4, 2.0f, 3.0f, &was) > 0 && g_new > was);
-    assert_int_equal(g_tracker.counters.identities_recovered, 0);
+    if (rules) {
+        assert_int_equal(g_tracker.counters.identities_recovered, 0);
+    }
     /* 2.8 m away 0.4 s after the person was last seen (deleted after 0.2 s unseen): out of walking
      * reach (2.4 s later the same place is within it) */
     const mvt_real far[3] = {5.0f, 0.6f, 1.75f};
     assert_true(lost_and_born(far, 0.4, 0.2f, 3.0f, &was) > 0 && g_new > was);
     assert_int_equal(lost_and_born(near_same, 0.4, 0.2f, 3.0f, &was), was);
     /* the same 2.8 m 0.8 s after: inside the gate (d^2 about 12 of 16.3), but a new person anywhere
-     * in the 75 m^3 room is likelier than the lost one that far (likelier_than_new; the gate alone
-     * gave the identity) */
-    assert_true(lost_and_born(far, 0.8, 0.2f, 3.0f, &was) > 0 && g_new > was);
-    assert_int_equal(g_tracker.counters.identities_recovered, 0);
-    /* after recover_s: let go */
+     * in the 75 m^3 room is likelier than the lost one that far (the rules' likelier_than_new; the
+     * gate alone gave the identity). The body model pairs a birth with any label whose gate holds it
+     * (docs/body-model.md: weighing a newcomer against the lost person cost switches on vtest.avi). */
+    if (rules) {
+        assert_true(lost_and_born(far, 0.8, 0.2f, 3.0f, &was) > 0 && g_new > was);
+        assert_int_equal(g_tracker.counters.identities_recovered, 0);
+    }
+    /* after recover_s (the body model: MVT_BODY_DORMANT_S, 3 s): let go */
     assert_true(lost_and_born(near_same, 5.6, 2.0f, 3.0f, &was) > 0 && g_new > was);
 }
 
@@ -889,9 +897,11 @@ static void test_mvt_tracker_step_walker_along_wall_keeps_identity(void **state)
         }
     }
     const mvt_real end[3] = {(mvt_real)(1.0 + 0.6 * 149 * 0.04), 4.7f, 1.72f};
-    assert_int_equal(g_tracker.counters.deleted_exit, 1);
     assert_int_equal(id_near(end), first);
-    assert_int_equal(g_tracker.counters.identities_recovered, 1);
+    if (g_lifecycle == MVT_LIFECYCLE_RULES) { /* deleted as leaving, then recovered */
+        assert_int_equal(g_tracker.counters.deleted_exit, 1);
+        assert_int_equal(g_tracker.counters.identities_recovered, 1);
+    }
 }
 
 /* A short person walks into the middle of a group of three tall ones, stands there 3 s (hidden in
@@ -1090,9 +1100,11 @@ static void test_mvt_tracker_step_vanished_person_contradicted_deleted(void **st
                 gone_after = g;
             }
         }
-        assert_true(gone_after > 0);
-        if (with_boxes) {
-            assert_true(gone_after <= 15); /* 0.5 s + a frame */
+        if (g_lifecycle == MVT_LIFECYCLE_BODY) {
+            /* five views that each miss the head: the existence falls within a few frames */
+            assert_true(gone_after >= 0 && gone_after <= 5);
+        } else if (with_boxes) {
+            assert_true(gone_after > 0 && gone_after <= 15); /* 0.5 s + a frame */
             assert_int_equal(g_tracker.counters.deleted_contradicted, 1);
         } else {
             assert_true(gone_after >= 45 && gone_after <= 55); /* coast_max_s = 2 s */
@@ -1503,17 +1515,26 @@ static void test_mvt_tracker_step_camera_that_cannot_see_does_not_update(void **
         d->score = 1;
         d->hue = d->saturation = -1;
         mvt_tracker_step(&g_tracker, &g_frame, &g_out);
+        /* the person's track (the body model may also track the someone else camera 0 alone sees) */
+        int near = 0;
         for (int i = 0; i < g_out.num_tracks; i++) {
+            const double e = dist3(g_out.tracks[i].pos_m, P[0]);
+            if (e > 0.5) {
+                assert_int_equal(g_lifecycle, MVT_LIFECYCLE_BODY);
+                continue;
+            }
+            near++;
             assert_true((g_out.tracks[i].cameras_used & 1u) == 0u);
+            worst = f > 10 && e > worst ? e : worst;
         }
         if (f > 10) {
-            assert_int_equal(g_out.num_tracks, 1);
-            const double e = dist3(g_out.tracks[0].pos_m, P[0]);
-            worst = e > worst ? e : worst;
+            assert_int_equal(near, 1);
         }
     }
     assert_true(worst < 0.1);
-    assert_true(g_tracker.counters.outside_picture > 50);
+    if (g_lifecycle == MVT_LIFECYCLE_RULES) {
+        assert_true(g_tracker.counters.outside_picture > 50);
+    }
 }
 
 /* The room's corner camera 0 and its zenith camera as a two-camera rig; a person at y (x 3.0 m,
@@ -1661,6 +1682,10 @@ WITH_BODY(test_mvt_tracker_step_more_people_than_capacity_births_refused_counted
 WITH_BODY(test_mvt_tracker_step_person_returns_new_identity)
 WITH_BODY(test_mvt_tracker_step_queue_hidden_kept_while_box_needs_them)
 WITH_BODY(test_mvt_tracker_step_ghost_in_boxes_refuted_by_masks)
+WITH_BODY(test_mvt_tracker_step_person_lost_and_back_keeps_identity)
+WITH_BODY(test_mvt_tracker_step_vanished_person_contradicted_deleted)
+WITH_BODY(test_mvt_tracker_step_walker_along_wall_keeps_identity)
+WITH_BODY(test_mvt_tracker_step_camera_that_cannot_see_does_not_update)
 
 /* ... and with the triangulate-then-KF baseline (--mode kf), which runs the body model's lifecycle
  * with a triangulated point for the projective filter's per-view heads. Not the merged pair or the
@@ -1723,6 +1748,10 @@ int main(void)
         cmocka_unit_test(test_mvt_tracker_step_person_returns_new_identity_body),
         cmocka_unit_test(test_mvt_tracker_step_queue_hidden_kept_while_box_needs_them_body),
         cmocka_unit_test(test_mvt_tracker_step_ghost_in_boxes_refuted_by_masks_body),
+        cmocka_unit_test(test_mvt_tracker_step_person_lost_and_back_keeps_identity_body),
+        cmocka_unit_test(test_mvt_tracker_step_vanished_person_contradicted_deleted_body),
+        cmocka_unit_test(test_mvt_tracker_step_walker_along_wall_keeps_identity_body),
+        cmocka_unit_test(test_mvt_tracker_step_camera_that_cannot_see_does_not_update_body),
         cmocka_unit_test(test_mvt_tracker_step_two_people_crossing_keep_identities_body_kf),
         cmocka_unit_test(test_mvt_tracker_step_coasting_track_does_not_take_passer_by_body_kf),
         cmocka_unit_test(test_mvt_tracker_step_lost_tracks_reacquired_by_height_body_kf),
