@@ -472,6 +472,13 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
         cfg.volume.min[i] = (mvt_real)d->rig.volume_min[i];
         cfg.volume.max[i] = (mvt_real)d->rig.volume_max[i];
     }
+    cfg.volume.num_occluders = d->rig.num_occluders; /* the body model's static occluders */
+    for (int o = 0; o < d->rig.num_occluders; o++) {
+        for (int i = 0; i < 3; i++) {
+            cfg.volume.occluder_min[o][i] = (mvt_real)d->rig.occluder_min[o][i];
+            cfg.volume.occluder_max[o][i] = (mvt_real)d->rig.occluder_max[o][i];
+        }
+    }
     mvt_camera_t cams[MVT_MAX_CAMERAS];
     for (int k = 0; k < d->rig.num_cameras; k++) {
         if (mvt_cam_init(&cams[k], &d->rig.params[k]) != MVT_OK) {

@@ -187,7 +187,8 @@ mvt_real mvt_body_clutter_density(const mvt_tracker_t *self, int k);
 /* The feet of blob det of camera k, when its bottom is visible: not within MVT_BODY_EDGE_PX of the
  * picture's edge, and its box overlapping no silhouette (this camera's, ws.sil) of a body likely
  * present other than track `self_t` (-1: none is the blob's own): a nearer or merged body would
- * hide or be the bottom. uv receives the bottom's centre. 1 when visible. O(T). */
+ * hide or be the bottom; and its ray meeting no static occluder before the floor (furniture's edge
+ * would be the bottom). uv receives the bottom's centre. 1 when visible. O(T + occluders). */
 int mvt_body_feet_visible(const mvt_tracker_t *self, int k, const mvt_detection_t *det, int self_t, mvt_real uv[2]);
 
 /* The innovation of feet seen at uv (raw pixels) in camera k against state s: the blob's lowest
@@ -213,6 +214,13 @@ mvt_real mvt_body_head_density(const mvt_tracker_t *self, const mvt_pkf_innov_t 
 /* The steps (see above). */
 void mvt_body_existence(mvt_tracker_t *self, mvt_real dt);
 void mvt_body_visibility(mvt_tracker_t *self, const mvt_view_t *view, int k);
+
+/* The line from o along dir, for s in (0, s_max), passes through one of the rig's static occluders
+ * (mvt_volume_t). O(occluders). */
+int mvt_body_occluded(const mvt_tracker_t *self, const mvt_real o[3], const mvt_real dir[3], mvt_real s_max);
+
+/* Camera cam's line of sight to x passes through a static occluder before reaching it. */
+int mvt_body_behind_occluder(const mvt_tracker_t *self, const mvt_camera_t *cam, const mvt_real x[3]);
 
 /* Camera k's mask (where it sent one) shows background all around the head predicted at p (within
  * half a head's width, three of the detector's sigmas and two of the prediction's spreads). */

@@ -100,7 +100,7 @@ static mvt_real detect_prob(const mvt_tracker_t *self, const mvt_frame_t *frame,
 {
     const mvt_camera_t *cam = &self->cams[j];
     mvt_real axis[MVT_BODY_AXIS_N];
-    if (!mvt_body_in_picture(cam, uv) || !mvt_body_axis(self, cam, x, axis)) {
+    if (!mvt_body_in_picture(cam, uv) || mvt_body_behind_occluder(self, cam, x) || !mvt_body_axis(self, cam, x, axis)) {
         return MVT_R(0.0);
     }
     /* inside a blob that a tracked head tops, below that top: that blob may hold it (a host) */

@@ -10,7 +10,9 @@
  * not reported at all. Where the camera sent its foreground mask and the mask holds nothing near
  * the predicted head, nothing hides the head there (a body in front of it, or one it merged with,
  * would be foreground): it is not hidden, and is reported with p_detect; that it is missed there
- * weighs the camera's rate of empty masks at heads of people there (mvt_body_update.c).
+ * weighs the camera's rate of empty masks at heads of people there (mvt_body_update.c). A head
+ * whose line of sight from the camera passes through a static occluder the rig declares (a shelf,
+ * a pillar) is not reported at all.
  */
 #include "mvt_body.h"
 
@@ -32,6 +34,42 @@ mvt_real mvt_body_shown(const mvt_tracker_t *self, int k, const mvt_real axis[MV
         }
     }
     return shown;
+}
+
+int mvt_body_occluded(const mvt_tracker_t *self, const mvt_real o[3], const mvt_real dir[3], mvt_real s_max)
+{
+    const mvt_volume_t *v = &self->cfg.volume;
+    for (int b = 0; b < v->num_occluders; b++) {
+        /* slabs: the interval of s inside the box on every axis */
+        mvt_real s0 = MVT_R(0.0), s1 = s_max;
+        for (int i = 0; i < 3 && s0 < s1; i++) {
+            const mvt_real lo = v->occluder_min[b][i], hi = v->occluder_max[b][i];
+            if (MVT_FABS(dir[i]) < MVT_R(1e-12)) {
+                if (o[i] < lo || o[i] > hi) {
+                    s1 = MVT_R(-1.0);
+                }
+                continue;
+            }
+            mvt_real a = (lo - o[i]) / dir[i], c = (hi - o[i]) / dir[i];
+            if (a > c) {
+                const mvt_real tmp = a;
+                a = c;
+                c = tmp;
+            }
+            s0 = a > s0 ? a : s0;
+            s1 = c < s1 ? c : s1;
+        }
+        if (s0 < s1) {
+            return 1;
+        }
+    }
+    return 0;
+}
+
+int mvt_body_behind_occluder(const mvt_tracker_t *self, const mvt_camera_t *cam, const mvt_real x[3])
+{
+    const mvt_real d[3] = {x[0] - cam->centre[0], x[1] - cam->centre[1], x[2] - cam->centre[2]};
+    return mvt_body_occluded(self, cam->centre, d, MVT_R(1.0));
 }
 
 int mvt_body_head_on_background(const mvt_tracker_t *self, const mvt_view_t *view, int k, const mvt_pkf_pred_t *p)
@@ -83,7 +121,7 @@ void mvt_body_visibility(mvt_tracker_t *self, const mvt_view_t *view, int k)
         }
         self->pred_ok[t] = 1;
         const mvt_real *h = ws->head[t];
-        if (mvt_body_in_picture(cam, h)) {
+        if (mvt_body_in_picture(cam, h) && !mvt_body_behind_occluder(self, cam, tr->s.x)) {
             ws->pd[t] = self->p_detect_k[k];
         }
     }

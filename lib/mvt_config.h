@@ -32,6 +32,15 @@
 #error "MVT_MAX_DETECTIONS must be in 1..1024"
 #endif
 
+/* Static occluders the rig may declare (furniture, pillars: boxes in the room). Default 16,
+ * range 0..256. */
+#ifndef MVT_MAX_OCCLUDERS
+#define MVT_MAX_OCCLUDERS 16
+#endif
+#if MVT_MAX_OCCLUDERS < 0 || MVT_MAX_OCCLUDERS > 256
+#error "MVT_MAX_OCCLUDERS must be in 0..256"
+#endif
+
 /* Particles per target in the particle-filter tracker (mvt_pft). Default 1000, range 16..65535. */
 #ifndef MVT_MAX_PARTICLES
 #define MVT_MAX_PARTICLES 1000

@@ -83,6 +83,17 @@ static int body_config_ok(const mvt_tracker_config_t *c)
 
 static int config_ok(const mvt_tracker_config_t *c)
 {
+    if (c->volume.num_occluders < 0 || c->volume.num_occluders > MVT_MAX_OCCLUDERS) {
+        return 0;
+    }
+    for (int o = 0; o < c->volume.num_occluders; o++) {
+        for (int i = 0; i < 3; i++) {
+            const mvt_real lo = c->volume.occluder_min[o][i], hi = c->volume.occluder_max[o][i];
+            if (!isfinite(lo) || !isfinite(hi) || !(hi > lo)) {
+                return 0;
+            }
+        }
+    }
     for (int i = 0; i < 3; i++) {
         if (!(c->paper.var_m2[i] > MVT_R(0.0)) ||
             !isfinite(c->volume.min[i]) || !isfinite(c->volume.max[i]) || !(c->volume.max[i] > c->volume.min[i])) {

@@ -152,6 +152,13 @@ typedef struct mvt_volume {
                                    leave, m: the body model lets a track there walk out
                                    (population.exit_s), the rules delete one unseen there for
                                    rules.exit_coast_s; >= 0, default 0.5 */
+    int num_occluders;          /* static occluders the rig declares, 0..MVT_MAX_OCCLUDERS; default 0 */
+    mvt_real occluder_min[MVT_MAX_OCCLUDERS > 0 ? MVT_MAX_OCCLUDERS : 1][3]; /* each an axis-aligned
+                                   box (a desk, a shelf, a pillar), metres, max > min on every
+                                   axis: a camera whose line of sight to a head passes through one
+                                   does not see that head, and a blob's bottom whose ray meets one
+                                   before the floor is its edge, not feet (the body model) */
+    mvt_real occluder_max[MVT_MAX_OCCLUDERS > 0 ? MVT_MAX_OCCLUDERS : 1][3];
 } mvt_volume_t;
 
 /* A person's body, the size prior of a head top over a body standing on the floor. */

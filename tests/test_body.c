@@ -193,6 +193,102 @@ static void test_body_clutter_alone_confirms_nobody(void **state)
     assert_true(with * 100 <= frames);
 }
 
+/* The desk of the test below: a sideboard 0.9 m high between camera 0 and the people behind it. */
+static const double DESK_MIN[3] = {1.0, 2.0, 0.0}, DESK_MAX[3] = {5.0, 2.6, 0.9};
+
+/* 1 when the segment from a to b passes through the desk (sampled every centimetre of its length). */
+static int through_desk(const double a[3], const double b[3])
+{
+    const double len = sqrt((b[0] - a[0]) * (b[0] - a[0]) + (b[1] - a[1]) * (b[1] - a[1]) + (b[2] - a[2]) * (b[2] - a[2]));
+    const int n = (int)(len / 0.01) + 1;
+    for (int i = 1; i < n; i++) {
+        const double s = (double)i / n;
+        int in = 1;
+        for (int j = 0; j < 3; j++) {
+            const double p = a[j] + s * (b[j] - a[j]);
+            in &= p >= DESK_MIN[j] && p <= DESK_MAX[j];
+        }
+        if (in) return 1;
+    }
+    return 0;
+}
+
+/* body_blob's blob with the parts of the body's column that the desk hides from cam left out: its
+ * box's bottom is the desk's edge where the desk hides the legs. */
+static int body_blob_behind_desk(const mvt_camera_t *cam, const double x[3], test_rng_t *rng, mvt_detection_t *det)
+{
+    if (!body_blob(cam, x, x[2], rng, det)) return 0;
+    const double c[3] = {(double)cam->centre[0], (double)cam->centre[1], (double)cam->centre[2]};
+    double bottom = -1e9;
+    for (int i = 0; i < 8; i++) {
+        const double a = i * 0.785398;
+        for (double z = 0.0; z <= x[2]; z += 0.02) {
+            const double p[3] = {x[0] + 0.2 * cos(a), x[1] + 0.2 * sin(a), z};
+            mvt_real uv[2];
+            const mvt_real pr[3] = {(mvt_real)p[0], (mvt_real)p[1], (mvt_real)p[2]};
+            if (!through_desk(c, p) && mvt_cam_project(cam, pr, uv, NULL) == MVT_OK) bottom = fmax(bottom, (double)uv[1]);
+        }
+    }
+    det->box[3] = (mvt_real)fmin(bottom, 575.0);
+    return 1;
+}
+
+/* One camera (the room's corner camera 0) and a person walking behind a sideboard 0.9 m high that
+ * hides their legs: the blob's bottom is the sideboard's edge, not the feet, which would put the
+ * person about a metre too far along the camera's ray. Declared in the rig (mvt_volume_t's
+ * occluders), the sideboard makes that bottom no foot point, and the head's ray with the height
+ * prior places the person; undeclared, the edge taken for feet drags them off (the test can
+ * fail). 10 seeds, 200 frames, heights 1.6-1.8 m. */
+static double desk_rms(int declared)
+{
+    double se = 0;
+    int frames = 0;
+    for (int seed = 1; seed <= 10; seed++) {
+        mvt_camera_t cams[5];
+        assert_int_equal(test_room_cameras(cams, 1), 0);
+        mvt_tracker_config_t cfg;
+        mvt_tracker_config_default(&cfg);
+        cfg.lifecycle = MVT_LIFECYCLE_BODY;
+        cfg.volume.min[0] = 0; cfg.volume.min[1] = 0; cfg.volume.min[2] = 0;
+        cfg.volume.max[0] = 6; cfg.volume.max[1] = 5; cfg.volume.max[2] = 2.5f;
+        if (declared) {
+            cfg.volume.num_occluders = 1;
+            for (int j = 0; j < 3; j++) {
+                cfg.volume.occluder_min[0][j] = (mvt_real)DESK_MIN[j];
+                cfg.volume.occluder_max[0][j] = (mvt_real)DESK_MAX[j];
+            }
+        }
+        assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 1), MVT_OK);
+        test_rng_t rng = {(unsigned long long)seed * 6151ULL};
+        const double h = 1.6 + 0.2 * test_uniform(&rng);
+        for (int f = 0; f < 200; f++) {
+            const double x[3] = {1.5 + 3.0 * f / 200.0, 3.0, h};
+            blank(1, 1000000 + f * 40000);
+            mvt_detection_t d;
+            if (body_blob_behind_desk(&cams[0], x, &rng, &d)) add(0, &d);
+            assert_int_equal(mvt_tracker_step(&g_tracker, &g_frame, &g_out), MVT_OK);
+            for (int i = 0; i < g_out.num_tracks && f >= 25; i++) {
+                const mvt_track_out_t *o = &g_out.tracks[i];
+                if (o->status == MVT_TRACK_TENTATIVE) continue;
+                for (int a = 0; a < 3; a++) se += ((double)o->pos_m[a] - x[a]) * ((double)o->pos_m[a] - x[a]);
+                frames++;
+            }
+        }
+    }
+    assert_true(frames > 10 * 150);
+    return sqrt(se / frames);
+}
+
+static void test_body_feet_behind_declared_furniture_not_used(void **state)
+{
+    (void)state;
+    const double undeclared = desk_rms(0), declared = desk_rms(1);
+    print_message("behind a sideboard, one camera: 3D RMS %.3f m undeclared, %.3f m declared\n", undeclared, declared);
+    /* measured: 0.991 m undeclared, 0.311 m declared (the height prior 1.70 m against people of
+     * 1.6-1.8 m, seen 1 m below the camera and 3 m away) */
+    assert_true(declared < 0.4 && declared < 0.5 * undeclared);
+}
+
 /* The body model's parameters outside their physical ranges are refused. */
 static void test_body_config_out_of_range_rejected(void **state)
 {
@@ -215,6 +311,12 @@ static void test_body_config_out_of_range_rejected(void **state)
     bad = cfg;
     bad.lifecycle = (mvt_lifecycle_t)7;
     assert_int_equal(mvt_tracker_init(&g_tracker, &bad, cams, 5), MVT_ERR_INVALID);
+    bad = cfg;
+    bad.volume.num_occluders = 1;
+    bad.volume.occluder_min[0][0] = bad.volume.occluder_max[0][0] = 1.0f; /* an empty box */
+    assert_int_equal(mvt_tracker_init(&g_tracker, &bad, cams, 5), MVT_ERR_INVALID);
+    bad.volume.num_occluders = MVT_MAX_OCCLUDERS + 1;
+    assert_int_equal(mvt_tracker_init(&g_tracker, &bad, cams, 5), MVT_ERR_INVALID);
 }
 
 int main(void)
@@ -223,6 +325,7 @@ int main(void)
         cmocka_unit_test(test_body_one_camera_person_tracked_in_3d),
         cmocka_unit_test(test_body_fragments_support_and_never_become_people),
         cmocka_unit_test(test_body_clutter_alone_confirms_nobody),
+        cmocka_unit_test(test_body_feet_behind_declared_furniture_not_used),
         cmocka_unit_test(test_body_config_out_of_range_rejected),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

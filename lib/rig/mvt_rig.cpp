@@ -186,6 +186,44 @@ void load(const char *path, double default_sigma, mvt_rig_t *rig)
         rig->volume_min[2] = 0.0;
         rig->volume_max[2] = std::fmax(2.5, rig->volume_max[2]);
     }
+    rig->num_occluders = 0;
+    cv::FileNode occ = fs["occluders"];
+    if (!occ.empty()) {
+        if (!occ.isSeq()) {
+            throw RigError("rig: 'occluders' must be a sequence");
+        }
+        if ((int)occ.size() > MVT_MAX_OCCLUDERS) {
+            throw RigError("rig: " + std::to_string(occ.size()) + " occluders, capacity MVT_MAX_OCCLUDERS is " +
+                           std::to_string(MVT_MAX_OCCLUDERS));
+        }
+        for (int o = 0; o < (int)occ.size(); o++) {
+            const cv::FileNode b = occ[o];
+            const std::string where = "occluders[" + std::to_string(o) + "]";
+            if (!b.isMap()) {
+                throw RigError(where + ": must be a map with min and max");
+            }
+            std::string name;
+            if (!b["name"].empty()) {
+                if (!b["name"].isString()) {
+                    throw RigError(where + ": name must be a string");
+                }
+                b["name"] >> name;
+            }
+            cv::Mat lo = read_matrix(b, where, "min", true);
+            cv::Mat hi = read_matrix(b, where, "max", true);
+            need_total(lo, where, "min", 3);
+            need_total(hi, where, "max", 3);
+            for (int i = 0; i < 3; i++) {
+                rig->occluder_min[o][i] = lo.at<double>(i);
+                rig->occluder_max[o][i] = hi.at<double>(i);
+                if (!(rig->occluder_max[o][i] > rig->occluder_min[o][i])) {
+                    throw RigError(where + ": max must exceed min on every axis");
+                }
+            }
+            std::snprintf(rig->occluder_names[o], MVT_RIG_NAME_MAX, "%s", name.c_str());
+            rig->num_occluders++;
+        }
+    }
     rig->frame_rate = 25.0;
     if (!fs["frame_rate"].empty()) {
         if (!fs["frame_rate"].isReal() && !fs["frame_rate"].isInt()) {

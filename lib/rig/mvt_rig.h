@@ -25,6 +25,10 @@ typedef struct mvt_rig {
     double volume_min[3], volume_max[3]; /* metres */
     int volume_given;                    /* 0: derived from the camera centres */
     double frame_rate;                   /* Hz */
+    int num_occluders;                   /* static occluders (optional key `occluders`) */
+    char occluder_names[MVT_MAX_OCCLUDERS > 0 ? MVT_MAX_OCCLUDERS : 1][MVT_RIG_NAME_MAX];
+    double occluder_min[MVT_MAX_OCCLUDERS > 0 ? MVT_MAX_OCCLUDERS : 1][3]; /* metres */
+    double occluder_max[MVT_MAX_OCCLUDERS > 0 ? MVT_MAX_OCCLUDERS : 1][3];
 } mvt_rig_t;
 
 /* Reads and checks path. Returns 0, or -1 with a one-line reason in err. */

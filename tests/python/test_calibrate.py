@@ -171,6 +171,9 @@ def test_extrinsics_from_floor_board_and_from_points(tmp_path):
     cams = [camera(i) for i in range(len(CAMERAS))]
     rig = tmp_path / "rig.yaml"
     write_true_rig(rig, cams)
+    first = Rig.read(rig)  # the room's furniture, declared before calibrating, stays
+    first.occluders = [{"name": "shelf", "min": [0.5, 0.5, 0.0], "max": [1.0, 1.5, 2.0]}]
+    first.write(rig)
     rows = []
     for i, cam in enumerate(cams):
         # each camera looks at the board, which lies on the floor and is the world frame (board
@@ -205,6 +208,7 @@ def test_extrinsics_from_floor_board_and_from_points(tmp_path):
     for name, dpb, dab, dpp, dap, _ in rows:
         assert dpb < 0.02 and dab < 0.3, name
         assert dpp < 0.02 and dap < 0.3, name
+    assert [o["name"] for o in Rig.read(rig).occluders] == ["shelf"]
 
 
 def test_extrinsics_creates_a_camera_nobody_calibrated(tmp_path):

@@ -246,6 +246,25 @@ def test_daemon_help_and_bad_arguments(tmp_path, daemon_path):
     smartroom().write(good)
     r = subprocess.run([str(daemon_path), "--rig", str(good), "--mode", "nope"], capture_output=True, text=True)
     assert r.returncode == 2 and "unknown --mode" in r.stderr
+    # static occluders: read from the rig (an OpenCV matrix or a plain list), an empty box refused
+    room = smartroom()
+    room.occluders = [{"name": "desk", "min": [1.0, 2.0, 0.0], "max": [3.0, 2.6, 0.9]}]
+    with_desk = tmp_path / "desk.yaml"
+    room.write(with_desk)
+    text = with_desk.read_text().replace("occluders:", "occluders:\n   - { name: pillar, min: [4.0, 1.0, 0.0], "
+                                         "max: [4.3, 1.3, 2.5] }", 1)
+    with_desk.write_text(text)
+    empty = tmp_path / "empty.lcm"  # one event on a channel the daemon ignores
+    log = lcm.EventLog(str(empty), "w", overwrite=True)
+    log.write_event(1000000, "NOTHING", b"")
+    log.close()
+    r = subprocess.run([str(daemon_path), "--rig", str(with_desk), "--in", f"file://{empty}?speed=0", "--out",
+                        f"file://{tmp_path / 'o.lcm'}?mode=w"], capture_output=True, text=True, timeout=30)
+    assert r.returncode == 0 and "2 static occluders" in r.stderr, r.stderr
+    with_desk.write_text(text.replace("max: [4.3, 1.3, 2.5]", "max: [3.9, 1.3, 2.5]"))
+    r = subprocess.run([str(daemon_path), "--rig", str(with_desk)], capture_output=True, text=True)
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert "occluders[0]: max must exceed min" in r.stderr
 
 
 def test_daemon_live_udpm_tracks_and_stops_on_sigterm(tmp_path, daemon_path):

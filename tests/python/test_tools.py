@@ -30,6 +30,12 @@ def test_rig_write_read_round_trip_is_contract_yaml(tmp_path):
     for a, b in zip(rig.cameras, back.cameras):
         np.testing.assert_allclose(a.project(X), b.project(X), atol=1e-9)
     np.testing.assert_allclose(back.volume_max, rig.volume_max)
+    assert back.occluders == []
+    rig.occluders = [{"name": "shelf", "min": np.array([0.5, 0.5, 0.0]), "max": np.array([1.0, 1.5, 2.0])}]
+    rig.write(p)
+    back = Rig.read(p)
+    assert [o["name"] for o in back.occluders] == ["shelf"]
+    np.testing.assert_allclose(back.occluders[0]["max"], [1.0, 1.5, 2.0])
 
 
 def test_camera_project_jacobian_matches_finite_differences():

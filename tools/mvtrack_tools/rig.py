@@ -103,6 +103,8 @@ class Rig:
     volume_max: np.ndarray
     frame_rate: float = 25.0
     extra: dict = field(default_factory=dict)
+    # static occluders (furniture, pillars): [{"name": str, "min": (3,), "max": (3,)}], world metres
+    occluders: list = field(default_factory=list)
 
     def write(self, path: str | Path) -> None:
         fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_WRITE)
@@ -122,6 +124,16 @@ class Rig:
         fs.write("volume_min", np.asarray(self.volume_min, dtype=np.float64).reshape(3, 1))
         fs.write("volume_max", np.asarray(self.volume_max, dtype=np.float64).reshape(3, 1))
         fs.write("frame_rate", float(self.frame_rate))
+        if self.occluders:
+            fs.startWriteStruct("occluders", cv2.FileNode_SEQ)
+            for o in self.occluders:
+                fs.startWriteStruct("", cv2.FileNode_MAP)
+                if o.get("name"):
+                    fs.write("name", str(o["name"]))
+                fs.write("min", np.asarray(o["min"], dtype=np.float64).reshape(3, 1))
+                fs.write("max", np.asarray(o["max"], dtype=np.float64).reshape(3, 1))
+                fs.endWriteStruct()
+            fs.endWriteStruct()
         fs.release()
         # docs/interfaces.md section 2 names the OpenCV 4 header; OpenCV 5 writes "%YAML 1.2".
         text = Path(path).read_text()
@@ -148,8 +160,22 @@ class Rig:
         vmax = fs.getNode("volume_max").mat().ravel()
         fr = fs.getNode("frame_rate")
         rate = fr.real() if not fr.empty() else 25.0
+        occluders = []
+        occ = fs.getNode("occluders")
+        for i in range(occ.size() if not occ.empty() else 0):
+            o = occ.at(i)
+            nm = o.getNode("name")
+            occluders.append({"name": nm.string() if not nm.empty() else "",
+                              "min": _vector3(o.getNode("min")), "max": _vector3(o.getNode("max"))})
         fs.release()
-        return Rig(cams, vmin, vmax, rate)
+        return Rig(cams, vmin, vmax, rate, occluders=occluders)
+
+
+def _vector3(node) -> np.ndarray:
+    """A 3-vector written as an OpenCV matrix or as a plain YAML list."""
+    if node.isSeq():
+        return np.array([node.at(i).real() for i in range(node.size())], dtype=np.float64)
+    return node.mat().ravel().astype(np.float64)
 
 
 def look_at(name: str, position, target, K: np.ndarray, dist, width: int = 768, height: int = 576,
