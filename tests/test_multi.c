@@ -5,8 +5,7 @@
  * the rules' own counters and timers are checked for the rules only. Not with the body model: the
  * rules' duplicate priorities and existence chain (internals), colour in association (the body
  * model leaves it out: docs/body-model.md), a track kept longer on a mask's foreground (a rules'
- * timer), a short head measured from the mask out of a merged blob, and a ghost two views make
- * while three send boxes only (docs/limits.md). */
+ * timer), and a short head measured from the mask out of a merged blob (docs/limits.md). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -1196,7 +1195,12 @@ static void test_mvt_tracker_step_ghost_two_views_refuted_by_three(void **state)
             ghost_confirmed += id_near(G) > 0;
         }
         assert_true(id_near(X[0]) > 0 && id_near(X[1]) > 0);
-        if (with_boxes) {
+        if (with_boxes && g_lifecycle == MVT_LIFECYCLE_BODY) {
+            /* three views' misses outweigh the two views' blobs within a few frames (the rules
+             * refute the birth outright; docs/limits.md) */
+            print_message("ghost of two views, body model: confirmed in %d of 75 frames\n", ghost_confirmed);
+            assert_true(ghost_confirmed <= 3);
+        } else if (with_boxes) {
             assert_int_equal(ghost_confirmed, 0);
             assert_true(g_tracker.counters.births_refuted > 0);
         } else {
@@ -1712,6 +1716,7 @@ WITH_BODY(test_mvt_tracker_step_more_people_than_capacity_births_refused_counted
 WITH_BODY(test_mvt_tracker_step_person_returns_new_identity)
 WITH_BODY(test_mvt_tracker_step_queue_hidden_kept_while_box_needs_them)
 WITH_BODY(test_mvt_tracker_step_ghost_in_boxes_refuted_by_masks)
+WITH_BODY(test_mvt_tracker_step_ghost_two_views_refuted_by_three)
 WITH_BODY(test_mvt_tracker_step_person_where_one_camera_reaches_kept)
 WITH_BODY(test_mvt_tracker_step_vanished_in_widened_boxes_deleted_by_masks)
 WITH_BODY(test_mvt_tracker_step_person_lost_and_back_keeps_identity)
@@ -1780,6 +1785,7 @@ int main(void)
         cmocka_unit_test(test_mvt_tracker_step_person_returns_new_identity_body),
         cmocka_unit_test(test_mvt_tracker_step_queue_hidden_kept_while_box_needs_them_body),
         cmocka_unit_test(test_mvt_tracker_step_ghost_in_boxes_refuted_by_masks_body),
+        cmocka_unit_test(test_mvt_tracker_step_ghost_two_views_refuted_by_three_body),
         cmocka_unit_test(test_mvt_tracker_step_hidden_in_group_keeps_identity_body),
         cmocka_unit_test(test_mvt_tracker_step_person_where_one_camera_reaches_kept_body),
         cmocka_unit_test(test_mvt_tracker_step_vanished_in_widened_boxes_deleted_by_masks_body),
