@@ -14,7 +14,9 @@ static mvt_tracker_t g_tracker; /* large: static */
 static mvt_frame_t g_frame;
 static mvt_output_t g_out;
 
-static void init_body(mvt_camera_t cams[5], int n_cams)
+/* The room's body-model tracker on its first n_cams cameras; the box lo..hi declared as a static
+ * occluder when lo is given. */
+static void init_body_with(mvt_camera_t cams[5], int n_cams, const double *lo, const double *hi)
 {
     assert_int_equal(test_room_cameras(cams, 1), 0);
     mvt_tracker_config_t cfg;
@@ -22,7 +24,19 @@ static void init_body(mvt_camera_t cams[5], int n_cams)
     cfg.lifecycle = MVT_LIFECYCLE_BODY;
     cfg.volume.min[0] = 0; cfg.volume.min[1] = 0; cfg.volume.min[2] = 0;
     cfg.volume.max[0] = 6; cfg.volume.max[1] = 5; cfg.volume.max[2] = 2.5f;
+    if (lo != NULL) {
+        cfg.volume.num_occluders = 1;
+        for (int j = 0; j < 3; j++) {
+            cfg.volume.occluder_min[0][j] = (mvt_real)lo[j];
+            cfg.volume.occluder_max[0][j] = (mvt_real)hi[j];
+        }
+    }
     assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, n_cams), MVT_OK);
+}
+
+static void init_body(mvt_camera_t cams[5], int n_cams)
+{
+    init_body_with(cams, n_cams, NULL, NULL);
 }
 
 /* The blob of a body with head x in camera cam: top point (noisy) and the box of the body's column,
@@ -245,20 +259,7 @@ static double desk_rms(int declared)
     int frames = 0;
     for (int seed = 1; seed <= 10; seed++) {
         mvt_camera_t cams[5];
-        assert_int_equal(test_room_cameras(cams, 1), 0);
-        mvt_tracker_config_t cfg;
-        mvt_tracker_config_default(&cfg);
-        cfg.lifecycle = MVT_LIFECYCLE_BODY;
-        cfg.volume.min[0] = 0; cfg.volume.min[1] = 0; cfg.volume.min[2] = 0;
-        cfg.volume.max[0] = 6; cfg.volume.max[1] = 5; cfg.volume.max[2] = 2.5f;
-        if (declared) {
-            cfg.volume.num_occluders = 1;
-            for (int j = 0; j < 3; j++) {
-                cfg.volume.occluder_min[0][j] = (mvt_real)DESK_MIN[j];
-                cfg.volume.occluder_max[0][j] = (mvt_real)DESK_MAX[j];
-            }
-        }
-        assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 1), MVT_OK);
+        init_body_with(cams, 1, declared ? DESK_MIN : NULL, DESK_MAX);
         test_rng_t rng = {(unsigned long long)seed * 6151ULL};
         const double h = 1.6 + 0.2 * test_uniform(&rng);
         for (int f = 0; f < 200; f++) {
