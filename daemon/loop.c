@@ -63,8 +63,8 @@ int mvtd_open(mvtd_t *d)
         lcm_subscription_set_queue_capacity(g_sub, 256);
     }
     if (d->rig.num_occluders > 0) {
-        fprintf(stderr, "mvtrackd: %d cameras, %d static occluders, mode %s, in %s, out %s\n", d->rig.num_cameras,
-                d->rig.num_occluders, d->mode_name, d->in_url, d->out_url);
+        fprintf(stderr, "mvtrackd: %d cameras, mode %s, %d static occluders, in %s, out %s\n", d->rig.num_cameras,
+                d->mode_name, d->rig.num_occluders, d->in_url, d->out_url);
     } else {
         fprintf(stderr, "mvtrackd: %d cameras, mode %s, in %s, out %s\n", d->rig.num_cameras, d->mode_name, d->in_url,
                 d->out_url);

@@ -15,7 +15,8 @@ the cameras keep sending, and reads every TRACKS message. Prints, and writes to 
   be 0), and identities published after the restart that were published before it for anyone
   while the checkpoint was not restored;
 - resume_ms: from the restarted daemon's ready line (LCM subscribed) to its first TRACKS, and from
-  its exec to its first TRACKS.
+  its exec to its first TRACKS; resume_frames_from_ready: that first TRACKS' frame counted from the
+  first frame published after the ready line.
 """
 from __future__ import annotations
 
@@ -190,6 +191,9 @@ def run(how: str, seconds: float, at: float, down: float, mode: str, out: Path, 
         "reused_by_another_person": sorted(reused_by_other),
         "new_ids_that_existed_before": [],  # restored runs: reused_by_another_person is the check
         "resume_ms_from_ready": (after[0][0] - t_ready) * 1e3 if after and t_ready else None,
+        # frames: the first output's frame after the first frame published once it was ready (a
+        # slow or loaded machine stretches the milliseconds, not this)
+        "resume_frames_from_ready": frame_of_utime.get(after[0][1].utime, -1) - f_restart if after and t_ready else None,
         "resume_ms_from_exec": (after[0][0] - t_exec) * 1e3 if after else None,
         "tracks_after": len(after),
         "restore_line": next((ln for ln in err2 if "state" in ln and ("restored" in ln or "refused" in ln
