@@ -64,9 +64,6 @@
  * head's bob (MVT_BODY_HEAD_BOB_M, m). */
 #define MVT_BODY_HEIGHT_BAND MVT_R(3.0)
 #define MVT_BODY_HEAD_BOB_M MVT_R(0.04)
-/* A newborn at a lost person's place is that person only at a height both estimates agree on: the
- * squared difference within this many times the sum of their variances (chi-square, 1 dof, 99.7 %). */
-#define MVT_BODY_HEIGHT_GATE MVT_R(9.0)
 /* A camera's detection probability (a visible head reported inside its gate) is a running mean
  * over this time, s, of its likely-present tracks' hits, within MVT_BODY_PD_MIN..MVT_BODY_PD_MAX:
  * misses come in runs (a bad segmentation, a burst of noise) that independent frames at the

@@ -329,17 +329,15 @@ static void give_label(mvt_track_t *tr, const mvt_body_label_t *L, const mvt_bod
 
 /* How likely candidate cand is label L's person: L's chance of being a person there (its existence)
  * times the candidate's density under L's widened estimate; -1 where the candidate is neither within
- * the 3-dof gate of both covariances nor closer than a body's width horizontally at a height the
- * two agree on (two bodies cannot overlap, and a track that lost its person is often more sure of
- * its place than it should be; its person's height it knows). */
+ * the 3-dof gate of both covariances nor closer than a body's width horizontally (two bodies cannot
+ * overlap, and a track that lost its person is often more sure of its place than it should be). */
 static mvt_real heir_score(const mvt_tracker_t *self, const mvt_body_label_t *L, const mvt_body_cand_t *cand)
 {
     mvt_real det;
     const mvt_real d2 = mvt_trk_mahalanobis3(L->x, L->P, cand->x, cand->P, &det);
     const mvt_real sep = MVT_R(2.0) * self->cfg.body.halfwidth_m;
-    const mvt_real dz = L->x[2] - cand->x[2], vz = L->P[8] + cand->P[8];
-    const int beside = dist2_xy(L->x, cand->x) < sep * sep && dz * dz < MVT_BODY_HEIGHT_GATE * vz;
-    if (!(d2 >= MVT_R(0.0)) || !(det > MVT_R(0.0)) || (!(d2 < MVT_TRK_GATE3) && !beside)) {
+    if (!(d2 >= MVT_R(0.0)) || !(det > MVT_R(0.0)) ||
+        (!(d2 < MVT_TRK_GATE3) && !(dist2_xy(L->x, cand->x) < sep * sep))) {
         return MVT_R(-1.0);
     }
     return mvt_body_prob(L->exist_lo) * MVT_EXP(MVT_R(-0.5) * d2) / MVT_SQRT(det);

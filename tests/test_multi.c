@@ -854,10 +854,12 @@ static void test_mvt_tracker_step_person_lost_and_back_keeps_identity(void **sta
         /* the same with recovery off: a new identity */
         assert_true(lost_and_born(near_same, 2.4, 2.0f, 0.0f, &was) > 0 && g_new > was);
     }
-    /* 0.3 m shorter at the same place: another person */
+    /* 0.3 m shorter at the same place: another person (the rules; the body model gives a birth
+     * closer than a body's width to a lost person's place that label whatever its height:
+     * docs/body-model.md, "Tried and not kept") */
     const mvt_real shorter[3] = {3.1f, 2.6f, 1.45f};
-    assert_true(lost_and_born(shorter, 2.4, 2.0f, 3.0f, &was) > 0 && g_new > was);
     if (rules) {
+        assert_true(lost_and_born(shorter, 2.4, 2.0f, 3.0f, &was) > 0 && g_new > was);
         assert_int_equal(g_tracker.counters.identities_recovered, 0);
     }
     /* 2.8 m away 0.4 s after the person was last seen (deleted after 0.2 s unseen): out of walking
