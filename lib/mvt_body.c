@@ -236,8 +236,8 @@ int mvt_body_feet_visible(const mvt_tracker_t *self, int k, const mvt_detection_
     uv[0] = MVT_R(0.5) * (b[0] + b[2]);
     uv[1] = b[3];
     /* furniture the rig declares between the camera and the floor there: the bottom is its edge */
-    mvt_real o[3], dir[3];
     if (self->cfg.volume.num_occluders > 0) {
+        mvt_real o[3], dir[3];
         if (mvt_cam_ray(cam, uv, o, dir) != MVT_OK || !(dir[2] < MVT_R(0.0)) ||
             mvt_body_occluded(self, o, dir, -o[2] / dir[2])) {
             return 0;

@@ -496,14 +496,17 @@ static void learn_detection(mvt_tracker_t *self, int k, int masked, mvt_real dt)
     const mvt_body_ws_t *ws = &self->body;
     int n = 0, hits = 0, n_hidden = 0, hits_hidden = 0, n_bg = 0, hits_bg = 0;
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
-        /* the mask's trials: heads in view, not hidden, of people two other views placed */
         const mvt_track_t *tr = &self->tracks[t];
-        if (tr->id != 0 && mvt_trk_popcount(tr->cameras_placed_prev & ~(1u << k)) >= 2 && ws->pd[t] > MVT_R(0.0) &&
-            (ws->on_bg[t] || ws->pd[t] > MVT_R(0.5) * self->p_detect_k[k]) && masked) {
+        if (tr->id == 0 || !(ws->pd[t] > MVT_R(0.0))) {
+            continue;
+        }
+        /* the mask's trials: heads in view, not hidden, of people two other views placed */
+        if (masked && (ws->on_bg[t] || ws->pd[t] > MVT_R(0.5) * self->p_detect_k[k]) &&
+            mvt_trk_popcount(tr->cameras_placed_prev & ~(1u << k)) >= 2) {
             n_bg++;
             hits_bg += ws->on_bg[t];
         }
-        if (self->tracks[t].id == 0 || !(self->tracks[t].exist_lo > MVT_R(0.0)) || !(ws->pd[t] > MVT_R(0.0))) {
+        if (!(tr->exist_lo > MVT_R(0.0))) {
             continue;
         }
         if (ws->pd[t] > MVT_R(0.5) * self->p_detect_k[k]) {
