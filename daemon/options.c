@@ -58,12 +58,13 @@ static void usage(FILE *f)
             "                                   (MS+C; MS when a camera sends no colour); needs masks\n"
             "                      pf-ms        the same, motion masks only (colour ignored)\n"
             "  --lifecycle body|rules\n"
-            "                      pkf and kf modes: how tracks are born, kept and ended. body\n"
-            "                      (default): one model of a person, a head over a body with its\n"
-            "                      silhouette in every view, blobs explained as heads, fragments or\n"
-            "                      clutter, births from any number of views with a prior on head\n"
-            "                      height and the feet where visible, and a probability of existence\n"
-            "                      that confirms and deletes (kf: the heads its views place,\n"
+            "                      how tracks are born, kept and ended (pf: in the blob tracker\n"
+            "                      that proposes the particle filter's births). body (default):\n"
+            "                      one model of a person, a head over a body with its silhouette in\n"
+            "                      every view, blobs explained as heads, fragments or clutter,\n"
+            "                      births from any number of views with a prior on head height and\n"
+            "                      the feet where visible, and a probability of existence that\n"
+            "                      confirms and deletes (kf: the heads its views place,\n"
             "                      triangulated, update the track); rules: timers and rules\n"
             "  --motion imm|cv     pkf modes' motion model: imm (default), an interacting multiple\n"
             "                      model of standing, walking, turning and sitting people that\n"
@@ -89,7 +90,8 @@ static void usage(FILE *f)
             "                      browser, a detector); needs root or CAP_SYS_NICE (exit 2 without)\n");
     fprintf(f,
             "\n"
-            "The rules lifecycle (--lifecycle rules; the particle filter's blob tracker):\n"
+            "The rules lifecycle (--lifecycle rules), and the particle filter's exclusion and\n"
+            "identity recovery:\n"
             "  --exclusion M       two people's heads are at least M metres apart horizontally\n"
             "                      (default 0.5 in pf modes, 0.4 otherwise; 0 = off). pf: particles\n"
             "                      closer to another person's centre are penalised, so two filters\n"
@@ -494,9 +496,10 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
         mvt_pft_config_t pcfg;
         mvt_pft_config_default(&pcfg);
         pcfg.det = cfg;
-        /* the particle filter's blob tracker only proposes births: it keeps the lifecycle its
-         * figures were measured with (docs/particle-filter.md); exclusion is the particles' own */
-        pcfg.det.lifecycle = MVT_LIFECYCLE_RULES;
+        /* the particle filter's blob tracker only proposes births, on the lifecycle --lifecycle
+         * names (the body model by default); with the rules, without their occlusion and
+         * exclusion, as the particle filter's figures with them were measured: exclusion is the
+         * particles' own */
         pcfg.det.rules.occlusion = 0;
         pcfg.det.rules.exclusion_m = 0;
         pcfg.num_particles = (int)particles;

@@ -9,8 +9,7 @@ void mvt_pft_config_default(mvt_pft_config_t *c)
 {
     MVT_ASSERT(c != NULL);
     memset(c, 0, sizeof(*c));
-    mvt_tracker_config_default(&c->det);
-    c->det.lifecycle = MVT_LIFECYCLE_RULES; /* the blob tracker proposes births with the rules */
+    mvt_tracker_config_default(&c->det); /* the blob tracker proposes births: the body model */
     c->model.sigma_px = MVT_R(4.0);
     c->model.p_b = MVT_R(0.2);
     c->model.sigma_h = MVT_R(0.05);
