@@ -115,15 +115,15 @@ def mot(out: Path, quick: bool, quiet: bool):
 
 
 def random_rigs(out: Path, quick: bool, quiet: bool):
-    return rig_suite(out, QUICK_RIGS if quick else RIGS, "1" if quick else "3", quiet)
+    return rig_suite(out, QUICK_RIGS if quick else RIGS, "1" if quick else "3", quiet, "random rigs")
 
 
 def held_out_rigs(out: Path, quick: bool, quiet: bool):
     """Fifteen more random rooms and rigs, the same crowd scenes (full only)."""
-    return rig_suite(out, HELD_OUT_RIGS, "3", quiet)
+    return rig_suite(out, HELD_OUT_RIGS, "3", quiet, "held-out rigs")
 
 
-def rig_suite(out: Path, rigs: dict[int, int], seeds: str, quiet: bool):
+def rig_suite(out: Path, rigs: dict[int, int], seeds: str, quiet: bool, label: str):
     rows = []
     for n, c in rigs.items():
         d = out / f"rig{n}"
@@ -141,7 +141,7 @@ def rig_suite(out: Path, rigs: dict[int, int], seeds: str, quiet: bool):
                   sum(r["id_switches"] for r in rows), f"{min(r['idf1'] for r in rows):.3f}",
                   sum(r["false_positives"] for r in rows), sum(r["misses"] for r in rows)]])
     fails = [] if mean >= FLOORS["random_rigs.mota_mean_min"] else \
-        [f"random rigs: mean MOTA {mean:.4f} < {FLOORS['random_rigs.mota_mean_min']}"]
+        [f"{label}: mean MOTA {mean:.4f} < {FLOORS['random_rigs.mota_mean_min']}"]
     return md, {"mota_mean": mean}, fails
 
 
@@ -295,10 +295,10 @@ def header() -> str:
 
 def splice(text: str, name: str, body: str) -> str:
     """Replaces the block between `<!-- report:NAME -->` and `<!-- /report:NAME -->` in text."""
-    pat = re.compile(rf"(<!-- report:{name} -->\n).*?(\n<!-- /report:{name} -->)", re.S)
+    pat = re.compile(rf"(<!-- report:{name} -->\n)(?:.*?\n)?(<!-- /report:{name} -->)", re.S)  # empty or not
     if not pat.search(text):
         raise SystemExit(f"mvtrack report: docs/results.md has no report:{name} block")
-    return pat.sub(lambda m: m.group(1) + body + m.group(2), text)
+    return pat.sub(lambda m: m.group(1) + body + "\n" + m.group(2), text)
 
 
 def main(argv: list[str] | None = None) -> int:
