@@ -1,11 +1,11 @@
 """Live latency and output rate of mvtrackd at 25 fps while cameras drop out and come back.
 
     tools/mvtrack latency [--seconds 120] [--people 5] [--drop-every 20] [--drop-for 4]
-                          [--flood-camera K --flood-factor F] [--clock K:MS] [--delay K:MS] [--view]
+                          [--flood-camera K --flood-factor F --flood-after-s S] [--clock K:MS] [--delay K:MS] [--view]
 
 Starts `mvtrackd` live on a private LCM multicast port (ttl=0), publishes every camera's
-detections of people walking the SmartRoom rig at the rig's frame rate (5 cameras, +-3 ms capture
-jitter, cameras sending in a shuffled order), and silences one camera at a time for --drop-for
+detections of people walking the SmartRoom rig at the rig's frame rate (each head with its body's
+box, 5 cameras, +-3 ms capture jitter, cameras sending in a shuffled order), and silences one camera at a time for --drop-for
 seconds every --drop-every seconds. For every frame set it takes the wall time just after the last
 camera message was published and the `publish_utime` the daemon stamped on that frame's TRACKS:
 the difference is the latency (same machine, same CLOCK_REALTIME). Prints p50/p99/p99.9/max, the
@@ -13,7 +13,8 @@ TRACKS rate over 10-second windows, and writes out/latency/latency.json and late
 
 --flood-camera K: besides its own frames, camera K's channel carries F times its frame rate of
 extra messages (default F = 50) with plausible capture times (the current one) and random
-detections: a detector stuck in a loop, or someone replaying at line rate. The run then also
+detections: a detector stuck in a loop, or someone replaying at line rate; --flood-after-s S starts
+it S seconds into the run. The run then also
 reports the messages the daemon shed, and how well the people are tracked (share of true heads
 with a confirmed track within 0.3 m, mean error), to compare with a run without the flood.
 
@@ -43,6 +44,7 @@ from pathlib import Path
 import lcm
 import numpy as np
 
+from .crowd import body_box
 from .lcmio import camera_frame, mt
 from .paths import DAEMON, REPO
 from .rig import smartroom
@@ -90,6 +92,14 @@ def walkers(rng, n, frames, dt, lo, hi, apart=False):
     return out
 
 
+def blob_box(cam, head: np.ndarray) -> tuple[float, ...]:
+    """A walker's blob box: the body under the head, cut by the picture. Its bottom is where the
+    feet are (a made-up box would tell the tracker of feet that are not there); () when the body
+    has no image."""
+    b = body_box(cam, head)
+    return () if b is None else (max(0.0, b[0]), max(0.0, b[1]), min(cam.width - 1.0, b[2]), min(cam.height - 1.0, b[3]))
+
+
 def flood_process(url: str, cam, rate_hz: float, seed: int, stop, sent) -> None:
     """rate_hz extra messages on cam's channel, in bursts every 4 ms, until stop is set: 64
     messages of 3 random detections encoded once, each sent with the current capture time patched
@@ -129,6 +139,8 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--flood-camera", type=int, default=-1, help="camera index whose channel floods (default none)")
     ap.add_argument("--flood-factor", type=float, default=50.0, help="flood rate / frame rate (default 50)")
+    ap.add_argument("--flood-after-s", type=float, default=0.0,
+                    help="the flood starts this long after the first frame (default 0: with it)")
     ap.add_argument("--clock", action="append", default=[], metavar="K:MS",
                     help="camera K stamps its frames MS milliseconds ahead (negative: behind) of the others; "
                          "the tracking quality is then scored from --score-from-s on")
@@ -152,6 +164,8 @@ def main(argv=None) -> int:
             if not (0 <= int(k) < 5) or out[int(k)] < low:
                 ap.error(f"{name} {c}: K is a camera 0..4" + (", MS >= 0" if low == 0 else ""))
         return out
+    if not 0.0 <= a.flood_after_s < a.seconds:
+        ap.error("--flood-after-s must lie in [0, --seconds)")
     skew_us = per_camera(a.clock, "--clock", -10 ** 9)
     delay_us = per_camera(a.delay, "--delay", 0)
     if not DAEMON.exists():
@@ -242,8 +256,7 @@ def main(argv=None) -> int:
     u0 = int(time.time() * 1e6)
     ncam = len(rig.cameras)
     t_flood = time.time()
-    if flooder is not None:
-        flooder.start()  # a process of its own: the measuring publisher keeps its interpreter
+    flood_from = int(round(a.flood_after_s * rig.frame_rate))
     # --delay: a heap of (wall time due, order sent, channel, data); latency counts from the frame's
     # last message sent on time
     pending: list[tuple[float, int, str, bytes]] = []
@@ -259,6 +272,9 @@ def main(argv=None) -> int:
 
     try:
         for f in range(frames):
+            if flooder is not None and f == flood_from:
+                t_flood = time.time()
+                flooder.start()  # a process of its own: the measuring publisher keeps its interpreter
             t = f * period
             k_drop = -1
             if a.drop_every > 0 and (t % a.drop_every) >= a.drop_every - a.drop_for:
@@ -272,7 +288,9 @@ def main(argv=None) -> int:
                     continue
                 cam = rig.cameras[k]
                 uv = cam.project(people[f])
-                dets = [(x + rng.normal(0, 2.0), y + rng.normal(0, 2.0)) for x, y in uv
+                boxes = [blob_box(cam, head) for head in people[f]]
+                dets = [(x + rng.normal(0, 2.0), y + rng.normal(0, 2.0)) + ((b,) if b else ())
+                        for (x, y), b in zip(uv, boxes)
                         if 0 <= x < cam.width and 0 <= y < cam.height and rng.random() > 0.05]
                 jitter = int(rng.integers(-3000, 3001))
                 msgs.append((int(k), f"DETECTIONS_{cam.name}",
@@ -294,7 +312,7 @@ def main(argv=None) -> int:
     finally:
         stop.set()
         stop_flood.set()
-        if flooder is not None:
+        if flooder is not None and flooder.pid is not None:
             flooder.join(5)
         t_flood_end = time.time()
         daemon.send_signal(signal.SIGTERM)
