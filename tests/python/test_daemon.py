@@ -15,7 +15,7 @@ from mvtrack_tools.evaluate import evaluate_single
 from mvtrack_tools.lcmio import LogWriter, camera_frame, ground_truth, mt, read_log
 from mvtrack_tools.rig import random_rig, smartroom
 from mvtrack_tools.scenes import WalkModel, head_detections
-from mvtrack_tools.simulate import T0_UTIME, experiment1, write_scene
+from mvtrack_tools.simulate import T0_UTIME, _with_boxes, experiment1, write_scene
 
 pytestmark = pytest.mark.daemon
 
@@ -39,9 +39,9 @@ def start_live(tmp_path: Path, daemon_path: Path, port_base: int, seconds: float
     return rig, states, dets, p, lcm.LCM(url)
 
 
-def publish_live(lc, rig, dets, frames: int, sigma_px: float, silent=lambda f, k: False, linger_s: float = 1.0):
-    """Publishes every camera's detections at 25 fps (camera k silent at frame f when silent(f, k)),
-    handling what comes back meanwhile, then listens linger_s more."""
+def publish_live(lc, rig, states, dets, frames: int, sigma_px: float, silent=lambda f, k: False, linger_s: float = 1.0):
+    """Publishes every camera's detections, each with the body's box, at 25 fps (camera k silent at
+    frame f when silent(f, k)), handling what comes back meanwhile, then listens linger_s more."""
     time.sleep(0.5)  # the daemon subscribes
     t0 = time.monotonic()
     for f in range(frames):
@@ -49,7 +49,7 @@ def publish_live(lc, rig, dets, frames: int, sigma_px: float, silent=lambda f, k
         for k, cam in enumerate(rig.cameras):
             if not silent(f, k):
                 lc.publish(f"DETECTIONS_{cam.name}",
-                           camera_frame(u, f, cam, [(a, b) for a, b, _ in dets[f][k]], sigma_px).encode())
+                           camera_frame(u, f, cam, _with_boxes(cam, states[f, :3], dets[f][k]), sigma_px).encode())
         while lc.handle_timeout(0) > 0:
             pass
         delay = t0 + (f + 1) * 0.04 - time.monotonic()
@@ -273,7 +273,7 @@ def test_daemon_live_udpm_tracks_and_stops_on_sigterm(tmp_path, daemon_path):
     got = []
     lc.subscribe("TRACKS", lambda c, d: got.append(mt.tracks_t.decode(d)))
     try:
-        publish_live(lc, rig, dets, len(states), 7.0)
+        publish_live(lc, rig, states, dets, len(states), 7.0)
     finally:
         p.send_signal(signal.SIGTERM)
         _, err = p.communicate(timeout=10)
@@ -344,7 +344,7 @@ def test_daemon_live_camera_drop_output_keeps_rate(tmp_path, daemon_path):
     lc.subscribe("TRACKS", lambda c, d: got.append(mt.tracks_t.decode(d)))
     lc.subscribe("MVTRACK_STATUS", lambda c, d: status.append(mt.status_t.decode(d)))
     try:
-        publish_live(lc, rig, dets, len(states), 5.0, silent=lambda f, k: k == 2 and 50 <= f < 100, linger_s=1.3)
+        publish_live(lc, rig, states, dets, len(states), 5.0, silent=lambda f, k: k == 2 and 50 <= f < 100, linger_s=1.3)
     finally:
         p.send_signal(signal.SIGTERM)
         _, err = p.communicate(timeout=10)

@@ -34,7 +34,7 @@ from pathlib import Path
 import lcm
 import numpy as np
 
-from .latency import walkers
+from .latency import blob_box, walkers
 from .lcmio import camera_frame, mt
 from .paths import DAEMON, REPO
 from .rig import smartroom
@@ -63,12 +63,13 @@ def start_daemon(rig_path: Path, url: str, state: Path, mode: str):
 
 def frame_messages(rig, heads: np.ndarray, f: int, u: int, rng: np.random.Generator) -> list[tuple[str, bytes]]:
     """Frame f's camera messages, cameras in a random order: the heads projected, 2 px noise, 5 %
-    misses."""
+    misses, each with its body's box."""
     out = []
     for k in rng.permutation(len(rig.cameras)):
         cam = rig.cameras[k]
         uv = cam.project(heads)
-        dets = [(x + rng.normal(0, 2.0), y + rng.normal(0, 2.0)) for x, y in uv
+        boxes = [blob_box(cam, head) for head in heads]
+        dets = [(x + rng.normal(0, 2.0), y + rng.normal(0, 2.0)) + ((b,) if b else ()) for (x, y), b in zip(uv, boxes)
                 if 0 <= x < cam.width and 0 <= y < cam.height and rng.random() > 0.05]
         out.append((f"DETECTIONS_{cam.name}", camera_frame(u, f, cam, dets, 2.0).encode()))
     return out
