@@ -428,6 +428,7 @@ void mvt_body_step(mvt_tracker_t *self, const mvt_frame_t *frame, const int orde
     if (self->cfg.filter == MVT_FILTER_TRIANGULATE) {
         mvt_body_triangulate(self);
     }
+    mvt_body_regather(self, dt);
     mvt_body_one_view(self, frame);
     mvt_body_birth(self, frame, order, n_order, dt);
     mvt_body_prune(self);

@@ -225,6 +225,7 @@ int mvt_body_head_on_background(const mvt_tracker_t *self, const mvt_view_t *vie
 void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k);
 void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_real dt);
 void mvt_body_triangulate(mvt_tracker_t *self);
+void mvt_body_regather(mvt_tracker_t *self, mvt_real dt);
 void mvt_body_one_view(mvt_tracker_t *self, const mvt_frame_t *frame);
 void mvt_body_birth(mvt_tracker_t *self, const mvt_frame_t *frame, const int order[], int n_order, mvt_real dt);
 void mvt_body_prune(mvt_tracker_t *self);

@@ -10,18 +10,21 @@
  * prior of a displaced point raised to 1 - (p / p_detect) (1 - p_outlier): such a blob's top is
  * more often where the nearer body's outline ends, or the merged region's, than the head. How often
  * hidden heads still show is learnt per camera (learn_detection).
- * After every camera (mvt_body_one_view), a track whose head one camera alone placed this frame
- * takes that blob's feet where they are visible (mvt_body_feet_visible: not cut by the picture, no
- * other body's silhouette on the blob, the head not judged displaced): the body's point on the
- * floor nearest the camera, the camera's learnt distance ahead of the head's vertical (learn_feet,
- * from people two views place). With the head's ray they fix the distance along it, which is what
- * one view leaves open; where two or more views place the head, their rays do, and feet (whose
- * offset from the head's vertical is a body's, not a pixel's) measured worse there
- * (docs/body-model.md). The person's height is the head's height the last frame two views placed it
- * (or its birth's); a person shown before whom one view places takes it as a measurement of the
- * head's (a walking head's bob about it), and any other track fewer than two views place keeps its
- * head within MVT_BODY_HEIGHT_BAND spreads of it (a truncation): one view's update slides the head
- * along the ray, and the height with it.
+ * After every camera (mvt_body_regather), a track whose heads in three or more views agree on one
+ * point beyond its gate, two or more of them judged displaced and one placing it, starts again at
+ * that point: independent displacements do not agree, and one view's distance along its ray (the
+ * height prior's, or feet a box misplaced) was wrong. Then (mvt_body_one_view) a track whose head
+ * one camera alone placed this frame takes that blob's feet where they are visible
+ * (mvt_body_feet_visible: not cut by the picture, no other body's silhouette on the blob, the head
+ * not judged displaced): the body's point on the floor nearest the camera, the camera's learnt
+ * distance ahead of the head's vertical (learn_feet, from people two views place). With the head's
+ * ray they fix the distance along it, which is what one view leaves open; where two or more views
+ * place the head, their rays do, and feet (whose offset from the head's vertical is a body's, not a
+ * pixel's) measured worse there (docs/body-model.md). The person's height is the head's height the
+ * last frame two views placed it (or its birth's); a person shown before whom one view places takes
+ * it as a measurement of the head's (a walking head's bob about it), and any other track fewer than
+ * two views place keeps its head within MVT_BODY_HEIGHT_BAND spreads of it (a truncation): one
+ * view's update slides the head along the ray, and the height with it.
  * Existence (the integrated PDA's recursion with this camera's detection probability p):
  *   head detected with density N (its own, or    odds *= 1 - p + p N / (lambda + phi), phi the
  *   displaced: mvt_body_head_density)            density of other bodies' fragments at the blob
@@ -52,6 +55,8 @@
 #include "mvt_body.h"
 
 #include "mvt_mask.h"
+#include "mvt_linalg.h"
+#include "mvt_tri.h"
 
 #include <math.h>
 #include <stddef.h>
@@ -120,6 +125,121 @@ static void learn_feet(mvt_tracker_t *self, const mvt_track_t *tr, int t, const 
             next = next < MVT_R(1e-3) ? MVT_R(1e-3)
                                       : (next > MVT_BODY_FOOT_AHEAD_MAX_M ? MVT_BODY_FOOT_AHEAD_MAX_M : next);
             *f = next;
+        }
+    }
+}
+
+static void mark_placed(mvt_track_t *tr, int k);
+
+/* Track t's heads this frame, in three or more views, two or more of them displaced (beyond the
+ * gate), that all meet at one point at a person's height, away from the track: the views agree on
+ * where the person is, and the track is elsewhere (born along one view's ray at the wrong distance,
+ * or pinned there by a box whose bottom is not the feet). Displacements are independent per view
+ * (an occluder's burst, a merged blob), so three views that agree to their pixel noise are not
+ * displaced: the track starts again at their point, keeping its identity (mvt_body_regather asks
+ * this only of a track whose place has rested on one view for a while). */
+static int heads_agree_elsewhere(mvt_tracker_t *self, mvt_track_t *tr, int t)
+{
+    const mvt_tracker_config_t *c = &self->cfg;
+    mvt_tri_obs_t obs[MVT_MAX_CAMERAS];
+    int n = 0, n_used = 0;
+    for (int k = 0; k < self->num_cameras; k++) {
+        for (int d = 0; d < self->num_meas[k]; d++) {
+            if (self->body.head_of[k][d] != t || !self->meas_ok[k][d]) {
+                continue;
+            }
+            obs[n].cam = k;
+            obs[n].xn[0] = self->meas[k][d].xn[0];
+            obs[n].xn[1] = self->meas[k][d].xn[1];
+            obs[n].var_px2 = self->meas[k][d].var_px2;
+            n_used += (int)((tr->cameras_used >> (unsigned)k) & 1u);
+            n++;
+            break;
+        }
+    }
+    if (n < 3 || n_used < 1 || n - n_used < 2) {
+        return 0;
+    }
+    mvt_real x[3], cov[9];
+    if (mvt_tri_linear(self->cams, obs, n, x) != MVT_OK || mvt_tri_refine(self->cams, obs, n, 5, x) != MVT_OK) {
+        return 0;
+    }
+    /* the views' pixel noise alone: the weighted squared residuals within chi-square's 1 % point
+     * for 2n - 3 degrees of freedom (n views) */
+    static const mvt_real chi2_1pc[17] = {MVT_R(0.0),  MVT_R(0.0),  MVT_R(0.0),  MVT_R(11.3), MVT_R(15.1), MVT_R(18.5),
+                                          MVT_R(21.7), MVT_R(24.7), MVT_R(27.7), MVT_R(30.6), MVT_R(33.4), MVT_R(36.2),
+                                          MVT_R(38.9), MVT_R(41.6), MVT_R(44.3), MVT_R(47.0), MVT_R(49.6)};
+    mvt_real r2 = MVT_R(0.0);
+    for (int i = 0; i < n; i++) {
+        const mvt_real r = mvt_tri_reproj_px(self->cams, &obs[i], x);
+        r2 += r * r / obs[i].var_px2;
+    }
+    if (n > 16 || !(r2 <= chi2_1pc[n])) {
+        return 0;
+    }
+    const mvt_real dz = x[2] - c->body.head_height_m;
+    if (!(MVT_FABS(dz) <= MVT_R(3.0) * c->body.head_height_sd_m) || !mvt_trk_inside_volume(c, x) ||
+        mvt_tri_covariance(self->cams, obs, n, x, cov) != MVT_OK) {
+        return 0;
+    }
+    /* away from the track: beyond the chi-square gate of its position's own spread (3 dof, 1 %) */
+    mvt_real dx[3], Pi[9];
+    for (int i = 0; i < 3; i++) {
+        dx[i] = x[i] - tr->s.x[i];
+        for (int j = 0; j < 3; j++) {
+            Pi[i * 3 + j] = tr->s.P[i * 6 + j] + cov[i * 3 + j];
+        }
+    }
+    if (mvt_la_inv3(Pi, Pi) != MVT_OK) {
+        return 0;
+    }
+    mvt_real d2 = MVT_R(0.0);
+    for (int i = 0; i < 3; i++) {
+        for (int j = 0; j < 3; j++) {
+            d2 += dx[i] * Pi[i * 3 + j] * dx[j];
+        }
+    }
+    if (!(d2 > MVT_R(11.3))) {
+        return 0;
+    }
+    mvt_trk_start(self, tr, x, cov, tr->s.utime_us);
+    tr->seen_z = x[2];
+    tr->seen_zz = cov[8];
+    for (int i = 0; i < n; i++) {
+        mark_placed(tr, obs[i].cam);
+    }
+    return 1;
+}
+
+void mvt_body_regather(mvt_tracker_t *self, mvt_real dt)
+{
+    /* a track whose place rested on one view for longer than a view's displacement lasts (twice
+     * its mean duration, outlier_persist_s: 0.5 s) may stand elsewhere along that view's ray; one
+     * that two views placed since is where their rays meet, and views that agree elsewhere then
+     * are more likely displaced together for a while (bursts that happen to meet) */
+    const mvt_real wait_s = MVT_R(2.0) * self->cfg.motion.outlier_persist_s;
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        mvt_track_t *tr = &self->tracks[t];
+        if (tr->id != 0) {
+            tr->one_view_s = mvt_trk_popcount(tr->cameras_placed) >= 2 ? MVT_R(0.0) : tr->one_view_s + dt;
+        }
+    }
+    /* heads per track and how many of them were judged displaced, in one pass over the blobs */
+    int heads[MVT_MAX_TARGETS] = {0}, displaced[MVT_MAX_TARGETS] = {0};
+    for (int k = 0; k < self->num_cameras; k++) {
+        for (int d = 0; d < self->num_meas[k]; d++) {
+            const int t = self->body.head_of[k][d];
+            if (t >= 0 && self->meas_ok[k][d]) {
+                heads[t]++;
+                displaced[t] += (int)!((self->tracks[t].cameras_used >> (unsigned)k) & 1u);
+            }
+        }
+    }
+    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
+        mvt_track_t *tr = &self->tracks[t];
+        if (tr->id != 0 && !tr->dormant && tr->one_view_s >= wait_s && heads[t] >= 3 && displaced[t] >= 2 &&
+            heads[t] > displaced[t] && heads_agree_elsewhere(self, tr, t)) {
+            tr->one_view_s = MVT_R(0.0);
         }
     }
 }

@@ -196,7 +196,7 @@ static int tracker_state_ok(const mvt_tracker_config_t *c, const mvt_tracker_per
             !time_ok(tr->last_update_us, now) || !time_ok(tr->last_explained_us, now) ||
             !time_ok(tr->last_consistent_us, now) || !time_ok(tr->last_unrefuted_us, now) ||
             !time_ok(tr->last_needed_us, now) || tr->misses < 0 ||
-            !bank_ok(c, tr) || !lost_ok(c, &tr->held, now) || !isfinite(tr->exist_llr) || !isfinite(tr->exist_lo) || (tr->dormant != 0 && tr->dormant != 1) || (tr->was_shown != 0 && tr->was_shown != 1) || tr->reserved2 != 0 ||
+            !bank_ok(c, tr) || !lost_ok(c, &tr->held, now) || !isfinite(tr->exist_llr) || !isfinite(tr->exist_lo) || (tr->dormant != 0 && tr->dormant != 1) || (tr->was_shown != 0 && tr->was_shown != 1) || !(tr->one_view_s >= MVT_R(0.0)) || !isfinite(tr->one_view_s) ||
             !isfinite(tr->need_llr) || !seen_height_ok(c, tr) || !mvt_trk_app_ok(&tr->app) || !views_ok(tr, now) ||
             (tr->held.id != 0 && (tr->held.id != tr->id || tr->status != MVT_TRACK_TENTATIVE))) {
             return 0;

@@ -405,7 +405,8 @@ typedef struct mvt_track {
                                    after it was shown: its label waits MVT_BODY_DORMANT_S for the
                                    person to be found again (mvt_body_birth.c), unseen and unshown */
     int32_t was_shown;          /* MVT_LIFECYCLE_BODY: 1 once it has been shown confirmed */
-    int32_t reserved2;          /* zero */
+    mvt_real one_view_s;        /* MVT_LIFECYCLE_BODY: seconds since two or more views last placed it
+                                   in one frame (since its birth when none ever did) */
 } mvt_track_t;
 
 /* Multi-view birth candidates examined per frame (the best are kept; the excess is counted). */
