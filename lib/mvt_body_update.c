@@ -55,7 +55,6 @@
 #include "mvt_body.h"
 
 #include "mvt_mask.h"
-#include "mvt_linalg.h"
 #include "mvt_tri.h"
 
 #include <math.h>
@@ -183,24 +182,14 @@ static int heads_agree_elsewhere(mvt_tracker_t *self, mvt_track_t *tr, int t)
         return 0;
     }
     /* away from the track: beyond the chi-square gate of its position's own spread (3 dof, 1 %) */
-    mvt_real dx[3], Pi[9];
-    for (int i = 0; i < 3; i++) {
-        dx[i] = x[i] - tr->s.x[i];
-        for (int j = 0; j < 3; j++) {
-            Pi[i * 3 + j] = tr->s.P[i * 6 + j] + cov[i * 3 + j];
-        }
-    }
-    if (mvt_la_inv3(Pi, Pi) != MVT_OK) {
-        return 0;
-    }
-    mvt_real d2 = MVT_R(0.0);
+    mvt_real Pt[9];
     for (int i = 0; i < 3; i++) {
         for (int j = 0; j < 3; j++) {
-            d2 += dx[i] * Pi[i * 3 + j] * dx[j];
+            Pt[i * 3 + j] = tr->s.P[i * 6 + j];
         }
     }
-    if (!(d2 > MVT_R(11.3))) {
-        return 0;
+    if (!(mvt_trk_mahalanobis3(tr->s.x, Pt, x, cov, NULL) > MVT_R(11.3))) {
+        return 0; /* within it, or a singular spread (< 0) */
     }
     mvt_trk_start(self, tr, x, cov, tr->s.utime_us);
     tr->seen_z = x[2];

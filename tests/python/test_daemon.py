@@ -15,7 +15,7 @@ from mvtrack_tools.evaluate import evaluate_single
 from mvtrack_tools.lcmio import LogWriter, camera_frame, ground_truth, mt, read_log
 from mvtrack_tools.rig import random_rig, smartroom
 from mvtrack_tools.scenes import WalkModel, head_detections
-from mvtrack_tools.simulate import T0_UTIME, _with_boxes, experiment1, write_scene
+from mvtrack_tools.simulate import T0_UTIME, experiment1, with_boxes, write_scene
 
 pytestmark = pytest.mark.daemon
 
@@ -49,7 +49,7 @@ def publish_live(lc, rig, states, dets, frames: int, sigma_px: float, silent=lam
         for k, cam in enumerate(rig.cameras):
             if not silent(f, k):
                 lc.publish(f"DETECTIONS_{cam.name}",
-                           camera_frame(u, f, cam, _with_boxes(cam, states[f, :3], dets[f][k]), sigma_px).encode())
+                           camera_frame(u, f, cam, with_boxes(cam, states[f, :3], dets[f][k]), sigma_px).encode())
         while lc.handle_timeout(0) > 0:
             pass
         delay = t0 + (f + 1) * 0.04 - time.monotonic()

@@ -44,7 +44,7 @@ def experiment1(rig: Rig, seconds: float, var_px2: float, occlusion: bool, seed:
     return model, states, dets
 
 
-def _with_boxes(cam, head: np.ndarray, dets) -> list[tuple]:
+def with_boxes(cam, head: np.ndarray, dets) -> list[tuple]:
     """The person's blob box: the body under the head, cut by the picture. The head point's pixel
     noise is its own (the box's edges are other pixels); a burst's displaced detection (an occlusion,
     a bad segmentation) carries its box with it."""
@@ -71,7 +71,7 @@ def write_scene(sink, rig: Rig, states: np.ndarray, dets, var_px2: float, progre
         sink.write(utime, "GROUND_TRUTH", ground_truth(utime, f, [1], states[f, :3][None]))
         for k in rng.permutation(len(rig.cameras)):  # cameras arrive in any order
             cam = rig.cameras[k]
-            msg = camera_frame(utime, f, cam, _with_boxes(cam, states[f, :3], dets[f][k]), sd)
+            msg = camera_frame(utime, f, cam, with_boxes(cam, states[f, :3], dets[f][k]), sd)
             sink.write(utime, f"DETECTIONS_{cam.name}", msg)
 
 
