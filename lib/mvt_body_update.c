@@ -207,11 +207,16 @@ void mvt_body_regather(mvt_tracker_t *self, mvt_real dt)
      * that two views placed since is where their rays meet, and views that agree elsewhere then
      * are more likely displaced together for a while (bursts that happen to meet) */
     const mvt_real wait_s = MVT_R(2.0) * self->cfg.motion.outlier_persist_s;
+    int waited = 0;
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         mvt_track_t *tr = &self->tracks[t];
         if (tr->id != 0) {
             tr->one_view_s = mvt_trk_popcount(tr->cameras_placed) >= 2 ? MVT_R(0.0) : tr->one_view_s + dt;
+            waited |= !tr->dormant && tr->one_view_s >= wait_s;
         }
+    }
+    if (!waited) {
+        return; /* the usual frame: every track placed by two views within the wait */
     }
     /* heads per track and how many of them were judged displaced, in one pass over the blobs */
     int heads[MVT_MAX_TARGETS] = {0}, displaced[MVT_MAX_TARGETS] = {0};
