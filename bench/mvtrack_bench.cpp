@@ -23,8 +23,7 @@
  *                              0.3 false alarms per camera per frame; 3000 frames (2 min), each
  *                              step timed alone, the first 100 (births) excluded; also prints the
  *                              p99 and max and how many tracks were confirmed
- *                              (the default lifecycle: the body model)
- *   tracker_frame_8cam_16people_rules  the same with the rules' lifecycle (--lifecycle rules)
+ *                              (the body model)
  *   tracker_frame_8cam_16people_masks  the same with each camera's 192 x 144 foreground mask (a
  *                              head over a body per person, painted outside the timed step):
  *                              empty places, hidden tracks and heads standing out of merged blobs
@@ -403,7 +402,7 @@ void add_blob(mvt_view_t *v, mvt_real u, mvt_real vv, mvt_real half_w, mvt_real 
 
 /* tracker_frame_8cam_16people (masks: the _masks variant, each camera also sending a 192 x 144
  * foreground mask of the people, a head over a body, painted outside the timed step). */
-void bench_tracker_8cam(bool masks, bool rules = false)
+void bench_tracker_8cam(bool masks)
 {
     static mvt_tracker_t tr;
     static mvt_frame_t fr;
@@ -423,9 +422,6 @@ void bench_tracker_8cam(bool masks, bool rules = false)
     mvt_tracker_config_default(&cfg);
     cfg.volume.min[0] = 0; cfg.volume.min[1] = 0; cfg.volume.min[2] = 0;
     cfg.volume.max[0] = 8; cfg.volume.max[1] = 7; cfg.volume.max[2] = 2.5f;
-    if (rules) {
-        cfg.lifecycle = MVT_LIFECYCLE_RULES;
-    }
     mvt_tracker_init(&tr, &cfg, cams, nc);
     unsigned long long lcg = 88172645463325252ull;
     auto rnd = [&]() { lcg = lcg * 6364136223846793005ull + 1442695040888963407ull; return (double)(lcg >> 11) / 9007199254740992.0; };
@@ -488,7 +484,7 @@ void bench_tracker_8cam(bool masks, bool rules = false)
     std::sort(ns.begin(), ns.end());
     std::printf("{\"bench\": \"%s\", \"median_ns\": %.1f, \"p99_ns\": %.1f, "
                 "\"max_ns\": %.1f, \"runs\": %zu, \"mean_confirmed_tracks\": %.2f, \"births\": %llu}\n",
-                masks ? "tracker_frame_8cam_16people_masks" : rules ? "tracker_frame_8cam_16people_rules" : "tracker_frame_8cam_16people", ns[ns.size() / 2], ns[ns.size() * 99 / 100], ns.back(), ns.size(),
+                masks ? "tracker_frame_8cam_16people_masks" : "tracker_frame_8cam_16people", ns[ns.size() / 2], ns[ns.size() * 99 / 100], ns.back(), ns.size(),
                 (double)conf_sum / (double)ns.size(), (unsigned long long)tr.counters.births);
     if (masks) {
         std::printf("{\"bench\": \"tracker_frame_8cam_16people_masks.tops\", \"mask_top_updates\": %llu, "
@@ -603,12 +599,12 @@ int main(int argc, char **argv)
     for (const auto &w : want) {
         if (w == "--help" || w == "-h") {
             std::printf("usage: mvtrack-bench [filter_update_5cam] [tracker_frame_5cam_1target] "
-                        "[tracker_frame_8cam_16people] [tracker_frame_8cam_16people_masks] [tracker_frame_8cam_16people_rules] [pf_frame_5cam_4targets] [detect_frame_768x576]\n"
+                        "[tracker_frame_8cam_16people] [tracker_frame_8cam_16people_masks] [pf_frame_5cam_4targets] [detect_frame_768x576]\n"
                         "Prints one JSON object per benchmark (peers: NAME.eigen).\n");
             return 0;
         }
         if (w != "filter_update_5cam" && w != "tracker_frame_5cam_1target" && w != "tracker_frame_8cam_16people" &&
-            w != "tracker_frame_8cam_16people_masks" && w != "tracker_frame_8cam_16people_rules" &&
+            w != "tracker_frame_8cam_16people_masks" &&
             w != "pf_frame_5cam_4targets" && w != "detect_frame_768x576") {
             std::fprintf(stderr, "mvtrack-bench: unknown benchmark '%s'\n", w.c_str());
             return 2;
@@ -744,9 +740,6 @@ int main(int argc, char **argv)
     }
     if (enabled("tracker_frame_8cam_16people_masks")) {
         bench_tracker_8cam(true);
-    }
-    if (enabled("tracker_frame_8cam_16people_rules")) {
-        bench_tracker_8cam(false, true);
     }
     if (enabled("pf_frame_5cam_4targets")) {
         bench_pf(rig.cams);

@@ -13,7 +13,7 @@
  * sizeof of the real type and of the state, capacities, camera count, mode, particles), a hash
  * of the rig file's bytes, and CRC-32s of header and state. A checkpoint that passes waits for
  * the first camera message: restored when that message's capture time is no earlier than the
- * checkpoint's and at most rules.coast_max_s later (older states describe a room that has changed),
+ * checkpoint's and at most MVTD_CKPT_MAX_AGE_S later (older states describe a room that has changed),
  * then checked value by value by the core (mvt_*_resume), which copies nothing unless all of it
  * is sound. Everything else is refused with one log line and a clean start. The time the daemon
  * was down counts as unobserved, not as "unseen" (see mvt_tracker_resume).
@@ -450,7 +450,7 @@ void mvtd_ckpt_first_message(mvtd_t *d, int64_t utime)
     }
     d->ckpt_pending = 0;
     const mvtd_ckpt_header_t *h = &g_loaded.h;
-    const double coast_s = (double)d->trk->cfg.rules.coast_max_s;
+    const double coast_s = MVTD_CKPT_MAX_AGE_S;
     const int64_t age = utime - h->capture_utime;
     const int64_t period = 2 * d->assembler.half_period_us;
     mvt_err_t err = MVT_ERR_INVALID;
@@ -461,7 +461,7 @@ void mvtd_ckpt_first_message(mvtd_t *d, int64_t utime)
                  (long long)h->capture_utime, (long long)utime);
     } else if ((double)age > coast_s * 1e6) {
         snprintf(d->restore_note, sizeof(d->restore_note),
-                 "checkpoint refused: stale, saved %.2f s of capture time before the first message (tracks coast "
+                 "checkpoint refused: stale, saved %.2f s of capture time before the first message (at most "
                  "%.1f s); clean start",
                  (double)age * 1e-6, coast_s);
     } else {

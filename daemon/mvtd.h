@@ -29,7 +29,7 @@
 #define MVTD_MAX_UTIME (1LL << 60)
 
 /* Checkpoints (--state, checkpoint.c). */
-#define MVTD_CKPT_VERSION 9u /* 2: tracks remember each view's displacement; 3: and the last frame
+#define MVTD_CKPT_VERSION 10u /* 2: tracks remember each view's displacement; 3: and the last frame
                                  no view showed their place on background; the counters count
                                  the heads measured from the masks; 4: the existence of the body
                                  model's tracks and its cameras' clutter rates; 5: and their fragment
@@ -37,7 +37,11 @@
                                  how far ahead of the head the feet show; 7: and their rates of
                                  visible heads on the mask's background; 8: the particle filter's
                                  blob tracker runs the body model; 9: how long each track's place
-                                 has rested on one view */
+                                 has rested on one view; 10: the rules' timers and
+                                 identity records are gone */
+/* A checkpoint saved longer ago than this (capture time) before the first new message describes a
+ * room that has changed (people walk 2-3 m in 2 s) and is refused, s. */
+#define MVTD_CKPT_MAX_AGE_S 2.0
 /* Live, a checkpoint every this many frame sets: 0.2 s at 25 fps for the blob trackers (a 49 kB
  * file at the default capacities: 245 kB/s), 1 s for the particle filters (1.2 MB each at the default capacities). A
  * restart restores what was saved up to this long before the kill. */

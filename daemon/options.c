@@ -47,8 +47,8 @@ static void usage(FILE *f)
             "                                     directly in 3D, linearised with the projection's\n"
             "                                     Jacobian (the EKF form; measured best, see README);\n"
             "                                     where blobs carry hue/saturation, each track\n"
-            "                                     learns its person's colour, uses it in association\n"
-            "                                     and reports it in track_t\n"
+            "                                     learns its person's colour and reports it in\n"
+            "                                     track_t\n"
             "                      ekf          same as pkf\n"
             "                      pkf-paper    the paper's literal H (Eq. 18), OpenCV pixel origin\n"
             "                      pkf-centred  Eq. 18 with pixels centred on the principal point\n"
@@ -57,15 +57,14 @@ static void usage(FILE *f)
             "                                   foreground masks, and their hue/saturation when sent\n"
             "                                   (MS+C; MS when a camera sends no colour); needs masks\n"
             "                      pf-ms        the same, motion masks only (colour ignored)\n"
-            "  --lifecycle body|rules\n"
-            "                      how tracks are born, kept and ended (pf: in the blob tracker\n"
-            "                      that proposes the particle filter's births). body (default):\n"
-            "                      one model of a person, a head over a body with its silhouette in\n"
-            "                      every view, blobs explained as heads, fragments or clutter,\n"
-            "                      births from any number of views with a prior on head height and\n"
-            "                      the feet where visible, and a probability of existence that\n"
-            "                      confirms and deletes (kf: the heads its views place,\n"
-            "                      triangulated, update the track); rules: timers and rules\n"
+            "                      Tracks are born, kept and ended by one model of a person (pf: in\n"
+            "                      the blob tracker that proposes its births): a head over a body\n"
+            "                      with its silhouette in every view, blobs explained as heads,\n"
+            "                      fragments or clutter, births from any number of views with a\n"
+            "                      prior on head height and the feet where visible, and a\n"
+            "                      probability of existence that confirms and deletes (kf: the\n"
+            "                      heads its views place, triangulated, update the track)\n"
+
             "  --motion imm|cv     pkf modes' motion model: imm (default), an interacting multiple\n"
             "                      model of standing, walking, turning and sitting people that\n"
             "                      needs no tuning; cv: one constant-velocity model with --q\n"
@@ -90,31 +89,6 @@ static void usage(FILE *f)
             "                      browser, a detector); needs root or CAP_SYS_NICE (exit 2 without)\n");
     fprintf(f,
             "\n"
-            "The rules lifecycle (--lifecycle rules), and the particle filter's exclusion and\n"
-            "identity recovery:\n"
-            "  --exclusion M       two people's heads are at least M metres apart horizontally\n"
-            "                      (default 0.5 in pf modes, 0.4 otherwise; 0 = off). pf: particles\n"
-            "                      closer to another person's centre are penalised, so two filters\n"
-            "                      cannot share one body (0: the paper's independent filters); other\n"
-            "                      modes: a track seen by fewer than two cameras is kept this far\n"
-            "                      from the others\n"
-            "  --recover S         identity recovery: a person whose track was deleted while they may\n"
-            "                      still be in the room (unseen, hidden too long, contradicted, a\n"
-            "                      duplicate that drifted onto someone else) keeps their identity\n"
-            "                      S seconds, for a person born within walking reach at their head\n"
-            "                      height (of several, the one whose colour the blobs show, where\n"
-            "                      they carry hue/saturation; pf: born from the same blob track);\n"
-            "                      default 3, 0 = off\n"
-            "  --occlusion box|off a confirmed track a camera did not update although it lies inside\n"
-            "                      the box of a blob given to another track is hidden there: box\n"
-            "                      (default) keeps it in the box's columns and alive; off: missed\n"
-            "  --merge P           a detection inside the gates of two tracks that one camera cannot\n"
-            "                      tell apart (a merged blob): neither (default: update neither),\n"
-            "                      share (update both, covariance widened), off (one-to-one only),\n"
-            "                      top (the detector's rule: the higher head gets it when the order\n"
-            "                      is clear, otherwise neither)\n");
-    fprintf(f,
-            "\n"
             "The particle filter (--mode pf, pf-ms):\n"
             "  --particles N       pf: particles per person, 16..%d (default %d)\n"
             "  --particle-model column|point\n"
@@ -129,7 +103,13 @@ static void usage(FILE *f)
             "  --seed N            pf: random number seed (default 1); same seed, same output\n"
             "  --publish-particles N\n"
             "                      pf: publish N particles per person on MVTRACK_PARTICLES\n"
-            "                      (mvtrack.particles_t; default 0 = none)\n",
+            "                      (mvtrack.particles_t; default 0 = none)\n"
+            "  --exclusion M       pf: two people's heads are at least M metres apart horizontally:\n"
+            "                      particles closer to another person's centre are penalised, so two\n"
+            "                      filters cannot share one body (default 0.5; 0: the paper's\n"
+            "                      independent filters)\n"
+            "  --recover S         pf: a person whose filter lost them keeps their identity S seconds,\n"
+            "                      for a filter born from the same blob track (default 3, 0 = off)\n",
             MVT_MAX_PARTICLES, MVT_MAX_PARTICLES);
     fprintf(f,
             "\n"
@@ -292,9 +272,8 @@ static int option_choice(const char *opt_name, const char *arg, const char *cons
 int mvtd_configure(mvtd_t *d, int argc, char **argv)
 {
     const char *rig_path = NULL, *in_url = MVTD_DEFAULT_URL, *out_url = NULL, *mode = "pkf", *gate = "chi2",
-               *merge = "neither", *occlusion = "box", *particle_model = "column",
-               *state_path = NULL, *motion = NULL, *models = NULL, *pixels = "shared",
-               *lifecycle = "body";
+               *particle_model = "column",
+               *state_path = NULL, *motion = NULL, *models = NULL, *pixels = "shared";
     int q_given = 0;
     double sigma_px = 2.0, deadline_ms = 20.0, gate_chi2 = 13.8;
     mvt_real q[3] = {MVT_R(0.5), MVT_R(0.5), MVT_R(0.05)};
@@ -304,14 +283,13 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
         {"gate", required_argument, 0, 'g'},     {"gate-chi2", required_argument, 0, 'c'},
         {"q", required_argument, 0, 'q'},        {"sigma-px", required_argument, 0, 's'},
         {"deadline-ms", required_argument, 0, 'd'}, {"verbose", no_argument, 0, 'v'},
-        {"merge", required_argument, 0, 'M'},    {"help", no_argument, 0, 'h'},
-        {"occlusion", required_argument, 0, 'O'},
+        {"help", no_argument, 0, 'h'},
         {"particles", required_argument, 0, 'P'}, {"exclusion", required_argument, 0, 'X'},
         {"seed", required_argument, 0, 'S'},     {"publish-particles", required_argument, 0, 'Q'},
         {"particle-model", required_argument, 0, 'B'}, {"state", required_argument, 0, 'T'},
         {"motion", required_argument, 0, 'N'},   {"motion-models", required_argument, 0, 'W'},
         {"pixels", required_argument, 0, 'x'},   {"recover", required_argument, 0, 'R'},
-        {"outlier-persist", required_argument, 0, 'L'}, {"lifecycle", required_argument, 0, 'Y'},
+        {"outlier-persist", required_argument, 0, 'L'}, 
         {"rt-priority", required_argument, 0, 'F'},
         {0, 0, 0, 0}};
     int opt;
@@ -320,21 +298,18 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
     double exclusion_m = -1.0; /* mode-dependent default */
     double recover_s = -1.0;   /* the library's default */
     double persist_s = -1.0;   /* the library's default */
-    while ((opt = getopt_long(argc, argv, "r:i:o:m:g:c:q:s:d:M:O:vhP:X:S:Q:B:T:N:W:x:R:L:Y:", opts, NULL)) != -1) {
+    while ((opt = getopt_long(argc, argv, "r:i:o:m:g:c:q:s:d:vhP:X:S:Q:B:T:N:W:x:R:L:", opts, NULL)) != -1) {
         switch (opt) {
         case 'r': rig_path = optarg; break;
         case 'i': in_url = optarg; break;
         case 'o': out_url = optarg; break;
         case 'm': mode = optarg; break;
         case 'g': gate = optarg; break;
-        case 'M': merge = optarg; break;
-        case 'O': occlusion = optarg; break;
         case 'B': particle_model = optarg; break;
         case 'T': state_path = optarg; break;
         case 'N': motion = optarg; break;
         case 'W': models = optarg; break;
         case 'x': pixels = optarg; break;
-        case 'Y': lifecycle = optarg; break;
         case 'c':
             if (option_pos("--gate-chi2", optarg, &gate_chi2) != 0) {
                 return 2;
@@ -411,21 +386,19 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
     mvt_tracker_config_default(&cfg);
     static const char *const modes[] = {"pkf", "ekf", "pkf-paper", "pkf-centred", "kf", "pf", "pf-ms"};
     static const char *const gates[] = {"chi2", "paper"};
-    static const char *const merges[] = {"neither", "share", "off", "top"};
     static const char *const particle_models[] = {"column", "point"};
     const int mi = option_choice("--mode", mode, modes, 7);
     const int gi = option_choice("--gate", gate, gates, 2);
-    const int ri = option_choice("--merge", merge, merges, 4);
     const int bi = option_choice("--particle-model", particle_model, particle_models, 2);
-    static const char *const occlusions[] = {"box", "off"};
-    const int oi = option_choice("--occlusion", occlusion, occlusions, 2);
     static const char *const motions[] = {"imm", "cv"};
     const int vi = motion == NULL ? (q_given ? 1 : 0) : option_choice("--motion", motion, motions, 2);
     static const char *const pixel_uses[] = {"shared", "independent"};
     const int xi = option_choice("--pixels", pixels, pixel_uses, 2);
-    static const char *const lifecycles[] = {"rules", "body"};
-    const int li = option_choice("--lifecycle", lifecycle, lifecycles, 2);
-    if (mi < 0 || gi < 0 || ri < 0 || bi < 0 || oi < 0 || vi < 0 || xi < 0 || li < 0) {
+    if (mi < 0 || gi < 0 || bi < 0 || vi < 0 || xi < 0) {
+        return 2;
+    }
+    if (mi < 5 && (exclusion_m >= 0.0 || recover_s >= 0.0)) {
+        fprintf(stderr, "mvtrackd: --exclusion and --recover are the particle filter's (--mode pf, pf-ms)\n");
         return 2;
     }
     if (vi == 0 && q_given) {
@@ -438,17 +411,9 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
     cfg.lin = mode_lin[mi];
     cfg.filter = mi == 4 ? MVT_FILTER_TRIANGULATE : MVT_FILTER_PROJECTIVE;
     cfg.gate = gi == 0 ? MVT_GATE_CHI2 : MVT_GATE_PAPER;
-    static const mvt_merge_t merge_of[] = {MVT_MERGE_NEITHER, MVT_MERGE_SHARE, MVT_MERGE_OFF, MVT_MERGE_TOP};
-    cfg.rules.merge = merge_of[ri];
     cfg.numerics.gate_chi2 = (mvt_real)gate_chi2;
-    cfg.rules.occlusion = oi == 0;
-    cfg.lifecycle = li == 1 ? MVT_LIFECYCLE_BODY : MVT_LIFECYCLE_RULES;
-    if (exclusion_m < 0.0) { /* measured defaults: docs/particle-filter.md, docs/tracking.md */
-        exclusion_m = mi >= 5 ? 0.5 : 0.4;
-    }
-    cfg.rules.exclusion_m = (mvt_real)exclusion_m;
-    if (recover_s >= 0.0) {
-        cfg.rules.recover_s = (mvt_real)recover_s;
+    if (exclusion_m < 0.0) { /* measured default: docs/particle-filter.md */
+        exclusion_m = 0.5;
     }
     if (vi == 1) {
         mvt_imm_config_single(&cfg.motion, q);
@@ -496,12 +461,7 @@ int mvtd_configure(mvtd_t *d, int argc, char **argv)
         mvt_pft_config_t pcfg;
         mvt_pft_config_default(&pcfg);
         pcfg.det = cfg;
-        /* the particle filter's blob tracker only proposes births, on the lifecycle --lifecycle
-         * names (the body model by default); with the rules, without their occlusion and
-         * exclusion, as the particle filter's figures with them were measured: exclusion is the
-         * particles' own */
-        pcfg.det.rules.occlusion = 0;
-        pcfg.det.rules.exclusion_m = 0;
+        /* the particle filter's blob tracker (the body model) only proposes births */
         pcfg.num_particles = (int)particles;
         pcfg.use_colour = mi == 5;
         pcfg.column = bi == 0;

@@ -100,24 +100,20 @@ void mvtd_publish_status(mvtd_t *d)
     st.tracks_dropped_capacity = (int64_t)d->trk->counters.births_refused_full;
     const mvt_counters_t *c = &d->trk->counters;
     st.births = (int64_t)c->births;
-    st.deleted_tentative = (int64_t)c->deleted_tentative;
-    st.deleted_unseen = (int64_t)c->deleted_unseen;
+    st.deleted_unlikely = (int64_t)c->deleted_unlikely;
     st.deleted_exit = (int64_t)c->deleted_exit;
     st.deleted_uncertain = (int64_t)c->deleted_uncertain;
     st.deleted_outside = (int64_t)c->deleted_outside;
     st.deleted_duplicate = (int64_t)c->duplicates_deleted;
     st.updates = (int64_t)c->updates;
-    st.updates_merged_withheld = (int64_t)c->merged_ambiguous;
-    st.updates_merged_shared = (int64_t)c->merged_updates;
+    st.updates_feet = (int64_t)c->foot_updates;
+    st.updates_mask_top = (int64_t)c->mask_top_updates;
+    st.fragments = (int64_t)c->fragments;
     st.birth_candidates_dropped = (int64_t)c->birth_candidates_dropped;
     st.numeric_faults = (int64_t)c->numeric_faults;
     st.updates_occluded = (int64_t)c->occluded_updates;
     st.updates_exclusion = (int64_t)c->exclusion_updates;
-    st.updates_merged_top = (int64_t)c->merged_top;
-    st.deleted_occluded = (int64_t)c->deleted_occluded;
-    st.deleted_contradicted = (int64_t)c->deleted_contradicted;
     st.tracks_reacquired = (int64_t)c->reacquired;
-    st.identities_recovered = (int64_t)c->identities_recovered;
     st.masks_decoded = d->masks_decoded;
     st.masks_rejected = d->masks_rejected;
     if (d->pf) {
@@ -135,6 +131,7 @@ void mvtd_publish_status(mvtd_t *d)
             }
         }
         st.births = (int64_t)pc->births;
+        st.deleted_tentative = (int64_t)pc->deleted_tentative;
         st.deleted_unseen = (int64_t)pc->deleted_lost;
         st.deleted_outside = (int64_t)pc->deleted_outside;
         st.deleted_duplicate = (int64_t)pc->deleted_duplicate;

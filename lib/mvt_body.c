@@ -181,13 +181,25 @@ int mvt_body_on_silhouette(const mvt_real axis[MVT_BODY_AXIS_N], const mvt_real 
     return point_seg_d2(uv, axis, axis + 2) <= w * w;
 }
 
-mvt_real mvt_body_head_density(const mvt_tracker_t *self, const mvt_pkf_innov_t *in)
+int mvt_body_gated(const mvt_tracker_t *self, int t, int k, int d, const mvt_pkf_innov_t *in)
+{
+    const mvt_tracker_config_t *c = &self->cfg;
+    if (c->gate == MVT_GATE_PAPER) {
+        mvt_real dist;
+        return mvt_pkf_paper_distance(&self->tracks[t].s, &self->cams[k], c->paper.var_m2, c->paper.gamma,
+                                      &self->meas[k][d], &dist) == MVT_OK &&
+               dist <= c->paper.delta;
+    }
+    return in->d2 <= c->numerics.gate_chi2;
+}
+
+mvt_real mvt_body_head_density(const mvt_tracker_t *self, const mvt_pkf_innov_t *in, int gated)
 {
     const mvt_imm_config_t *m = &self->cfg.motion;
     const mvt_real r = m->outlier_radius_px;
     const mvt_real y2 = in->y[0] * in->y[0] + in->y[1] * in->y[1];
     const mvt_real displaced = y2 <= r * r ? m->p_outlier / (MVT_R(3.14159265) * r * r) : MVT_R(0.0);
-    const mvt_real own = in->d2 <= self->cfg.numerics.gate_chi2 ? mvt_trk_density(in) : MVT_R(0.0);
+    const mvt_real own = gated ? mvt_trk_density(in) : MVT_R(0.0);
     return (MVT_R(1.0) - m->p_outlier) * own + displaced;
 }
 

@@ -1,6 +1,6 @@
 /*
  * mvt_body.h - one model of a person (MVT_LIFECYCLE_BODY): the steps of a frame, one file each
- * (internal to the core; docs/body-model.md gives the reasoning).
+ * (internal to the core; docs/tracking.md gives the reasoning).
  *
  * A person is a head top at (x, y, z) over a body that stands on the floor, 2 body.halfwidth_m wide.
  * Its silhouette in a camera is the box around the projections (lens included) of the head's and
@@ -203,10 +203,16 @@ mvt_err_t mvt_body_feet_innovation(const mvt_tracker_t *self, const mvt_cv_state
  * (from MVT_BODY_P_SHOWN_HIDDEN) by its existence. O(T). */
 mvt_real mvt_body_shown(const mvt_tracker_t *self, int k, const mvt_real axis[MVT_BODY_AXIS_N], int self_t);
 
+/* Detection d of camera k, at innovation in from track t's prediction, lies in the track's gate:
+ * the chi-square test on the innovation (MVT_GATE_CHI2), or the paper's projected ellipsoid
+ * (MVT_GATE_PAPER, mvt_pkf_paper_distance within paper.delta). */
+int mvt_body_gated(const mvt_tracker_t *self, int t, int k, int d, const mvt_pkf_innov_t *in);
+
 /* The density (1/px^2) of a head's detection at innovation in, as the motion model weighs it
- * (mvt_imm.h): the person's, N(y; 0, S), with probability 1 - p_outlier, and displaced anywhere
- * within outlier_radius_px with p_outlier. 0 beyond both the chi-square gate and that radius. */
-mvt_real mvt_body_head_density(const mvt_tracker_t *self, const mvt_pkf_innov_t *in);
+ * (mvt_imm.h): the person's, N(y; 0, S), with probability 1 - p_outlier where it is in the track's
+ * gate (gated: mvt_body_gated), and displaced anywhere within outlier_radius_px with p_outlier. 0
+ * beyond both. */
+mvt_real mvt_body_head_density(const mvt_tracker_t *self, const mvt_pkf_innov_t *in, int gated);
 
 /* The steps (see above). */
 void mvt_body_existence(mvt_tracker_t *self, mvt_real dt);

@@ -154,7 +154,7 @@ void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k)
                     mvt_pkf_innovation_from(&self->pred[t], &self->meas[k][d], NULL, &in) != MVT_OK) {
                     continue;
                 }
-                const mvt_real dens = mvt_body_head_density(self, &in);
+                const mvt_real dens = mvt_body_head_density(self, &in, mvt_body_gated(self, t, k, d, &in));
                 if (!(dens > MVT_R(0.0))) {
                     continue;
                 }

@@ -20,7 +20,7 @@
  * distance ahead of the head's vertical (learn_feet, from people two views place). With the head's
  * ray they fix the distance along it, which is what one view leaves open; where two or more views
  * place the head, their rays do, and feet (whose offset from the head's vertical is a body's, not a
- * pixel's) measured worse there (docs/body-model.md). The person's height is the head's height the
+ * pixel's) measured worse there (docs/tracking.md). The person's height is the head's height the
  * last frame two views placed it (or its birth's); a person shown before whom one view places takes
  * it as a measurement of the head's (a walking head's bob about it), and any other track fewer than
  * two views place keeps its head within MVT_BODY_HEIGHT_BAND spreads of it (a truncation): one
@@ -702,8 +702,9 @@ void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_rea
             const mvt_real uv[2] = {view->det[d].u, view->det[d].v};
             const mvt_real other = ws->frag_dens[d] - mvt_body_fragment_density(self, k, t, uv);
             const mvt_real alt = lambda + (other > MVT_R(0.0) ? other : MVT_R(0.0)); /* clutter or another's piece */
-            tr->exist_lo += MVT_LOG(MVT_R(1.0) - p + p * mvt_body_head_density(self, &in) / alt);
-            if (!(in.d2 <= self->cfg.numerics.gate_chi2)) {
+            const int gated = mvt_body_gated(self, t, k, d, &in);
+            tr->exist_lo += MVT_LOG(MVT_R(1.0) - p + p * mvt_body_head_density(self, &in, gated) / alt);
+            if (!gated) {
                 self->counters.gated_out++; /* displaced: evidence of the person, not of where */
                 if (merged_with(ws->sil[k][t], ws->head[t], view->det[d].box) && !tracked_top(self, view, k, d, t)) {
                     self->body.free_det[k][d] = 2; /* a merged blob topped by someone else */

@@ -115,34 +115,12 @@ void mvt_tracker_save(const mvt_tracker_t *self, mvt_tracker_persist_t *out)
     out->have_time = self->have_time;
     out->last_utime_us = self->last_utime_us;
     out->counters = self->counters;
-    memcpy(out->lost, self->lost, sizeof(out->lost));
-    out->birth_rate = self->birth_rate;
-    out->birth_rate_us = self->birth_rate_us;
     memcpy(out->clutter_n, self->clutter_n, sizeof(out->clutter_n));
     memcpy(out->p_detect_k, self->p_detect_k, sizeof(out->p_detect_k));
     memcpy(out->p_hidden_k, self->p_hidden_k, sizeof(out->p_hidden_k));
     memcpy(out->p_bg_k, self->p_bg_k, sizeof(out->p_bg_k));
     memcpy(out->foot_ahead_k, self->foot_ahead_k, sizeof(out->foot_ahead_k));
     memcpy(out->frag_n, self->frag_n, sizeof(out->frag_n));
-}
-
-/* A lost identity (free, or kept for recovery): a place, a covariance with a non-negative
- * diagonal, times in order. A held record must carry its track's identity. */
-static int lost_ok(const mvt_tracker_config_t *c, const mvt_lost_t *r, int64_t now)
-{
-    static const mvt_real zero[3] = {0};
-    if (r->id == 0) {
-        return 1;
-    }
-    for (int i = 0; i < 3; i++) {
-        if (!(r->P[i * 4] >= MVT_R(0.0) && r->P[i * 4] <= MVT_PERSIST_MAX_VAR)) {
-            return 0;
-        }
-    }
-    return r->id > 0 && r->reserved == 0 && mvt_trk_app_ok(&r->app) && time_ok(r->lost_us, now) &&
-           r->until_us >= r->lost_us &&
-           r->until_us <= now + (INT64_C(1) << 60) && mvt_la_all_finite(r->x, 3) &&
-           mvt_la_all_finite(r->P, 9) && place_ok(c, r->x, zero);
 }
 
 /* The head height of the last frame seen: in the volume widened like positions, a variance. */
@@ -169,9 +147,7 @@ static int views_ok(const mvt_track_t *tr, int64_t now)
 static int tracker_state_ok(const mvt_tracker_config_t *c, const mvt_tracker_persist_t *p)
 {
     if (p->next_id <= 0 || (p->have_time != 0 && p->have_time != 1) || p->last_utime_us < 0 ||
-        p->last_utime_us > (INT64_C(1) << 61) || !(p->birth_rate >= MVT_R(0.0)) ||
-        !(p->birth_rate <= (mvt_real)MVT_MAX_BIRTH_CANDIDATES) || p->birth_rate_us < 0 ||
-        p->birth_rate_us > p->last_utime_us) {
+        p->last_utime_us > (INT64_C(1) << 61)) {
         return 0;
     }
     for (int k = 0; k < MVT_MAX_CAMERAS; k++) {
@@ -193,50 +169,22 @@ static int tracker_state_ok(const mvt_tracker_config_t *c, const mvt_tracker_per
         }
         const int64_t now = p->last_utime_us;
         if (tr->id < 0 || !p->have_time || !status_ok(tr->status) || !estimate_ok(c, &tr->s, now) ||
-            !time_ok(tr->last_update_us, now) || !time_ok(tr->last_explained_us, now) ||
-            !time_ok(tr->last_consistent_us, now) || !time_ok(tr->last_unrefuted_us, now) ||
-            !time_ok(tr->last_needed_us, now) || tr->misses < 0 ||
-            !bank_ok(c, tr) || !lost_ok(c, &tr->held, now) || !isfinite(tr->exist_llr) || !isfinite(tr->exist_lo) || (tr->dormant != 0 && tr->dormant != 1) || (tr->was_shown != 0 && tr->was_shown != 1) || !(tr->one_view_s >= MVT_R(0.0)) || !isfinite(tr->one_view_s) ||
-            !isfinite(tr->need_llr) || !seen_height_ok(c, tr) || !mvt_trk_app_ok(&tr->app) || !views_ok(tr, now) ||
-            (tr->held.id != 0 && (tr->held.id != tr->id || tr->status != MVT_TRACK_TENTATIVE))) {
+            !time_ok(tr->last_update_us, now) || !bank_ok(c, tr) || !isfinite(tr->exist_lo) ||
+            (tr->dormant != 0 && tr->dormant != 1) || (tr->was_shown != 0 && tr->was_shown != 1) ||
+            !(tr->one_view_s >= MVT_R(0.0)) || !isfinite(tr->one_view_s) || !seen_height_ok(c, tr) ||
+            !mvt_trk_app_ok(&tr->app) || !views_ok(tr, now)) {
             return 0;
         }
     }
-    /* every identity at most once: live tracks and kept ones together */
-    int32_t all[MVT_MAX_TARGETS + MVT_MAX_LOST];
-    memcpy(all, ids, sizeof(ids));
-    for (int i = 0; i < MVT_MAX_LOST; i++) {
-        if (!lost_ok(c, &p->lost[i], p->last_utime_us) || (p->lost[i].id != 0 && !p->have_time)) {
-            return 0;
-        }
-        all[MVT_MAX_TARGETS + i] = p->lost[i].id;
-    }
-    return ids_unique(all, MVT_MAX_TARGETS + MVT_MAX_LOST);
+    return ids_unique(ids, MVT_MAX_TARGETS); /* every identity at most once */
 }
 
-/* An outage does not use up a kept identity's time (until), but the person walked meanwhile: the
- * reach still counts from the last frame seen (lost_us). */
-static void shift_lost_clocks(mvt_lost_t *r, int64_t by_us)
-{
-    if (r->id != 0) {
-        r->until_us += by_us;
-    }
-}
-
-static void shift_track_clocks(mvt_track_t *tracks, mvt_lost_t *lost, int64_t by_us)
+static void shift_track_clocks(mvt_track_t *tracks, int64_t by_us)
 {
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         if (tracks[t].id != 0) {
             tracks[t].last_update_us += by_us;
-            tracks[t].last_explained_us += by_us;
-            tracks[t].last_consistent_us += by_us;
-            tracks[t].last_unrefuted_us += by_us;
-            tracks[t].last_needed_us += by_us;
-            shift_lost_clocks(&tracks[t].held, by_us);
         }
-    }
-    for (int i = 0; i < MVT_MAX_LOST; i++) {
-        shift_lost_clocks(&lost[i], by_us);
     }
 }
 
@@ -252,14 +200,11 @@ mvt_err_t mvt_tracker_resume(mvt_tracker_t *self, const mvt_tracker_persist_t *p
         return MVT_ERR_INVALID;
     }
     memcpy(self->tracks, p->tracks, sizeof(self->tracks));
-    memcpy(self->lost, p->lost, sizeof(self->lost));
-    shift_track_clocks(self->tracks, self->lost, unobserved_us);
+    shift_track_clocks(self->tracks, unobserved_us);
     self->next_id = p->next_id;
     self->have_time = p->have_time;
     self->last_utime_us = p->last_utime_us;
     self->counters = p->counters;
-    self->birth_rate = p->birth_rate;
-    self->birth_rate_us = p->birth_rate_us;
     memcpy(self->clutter_n, p->clutter_n, sizeof(self->clutter_n));
     memcpy(self->p_detect_k, p->p_detect_k, sizeof(self->p_detect_k));
     memcpy(self->p_hidden_k, p->p_hidden_k, sizeof(self->p_hidden_k));

@@ -1,21 +1,20 @@
 /*
  * mvt_tracker.h - multi-view 3D tracker: the per-frame loop over the core's components.
  *
- * One call per frame set, shaped like Stone Soup's tracker loop, one module per step:
- *   predict      mvt_cv (to each camera's capture time, cameras in capture-time order)
- *   hypothesise  mvt_trk_assoc.c: per camera, every track's predicted observation, the gate
- *                (chi-square on the innovation, or the paper's ellipsoid test) and the merged-blob
- *                test (tracks whose image points are closer than merge_width_m at their depth)
- *   associate    mvt_trk_assoc.c: global nearest neighbour per camera (Hungarian method,
- *                mvt_assoc, on each cluster of tracks that compete for detections); a detection
- *                may update several tracks only when they are unresolved in that view
- *   update       mvt_pkf (or mvt_tri + mvt_cv for the triangulating baseline)
- *   delete       mvt_trk_delete.c: M-of-N confirmation, coasting, deletion by time unseen,
- *                uncertainty or leaving the volume
- *   initiate     mvt_trk_init.c: unassigned detections that agree in >= birth_min_views views
+ * One call per frame set, one model of a person (mvt_body.h, docs/tracking.md), one module per step:
+ *   predict      mvt_body.c: every track's motion models to the frame (mvt_imm)
+ *   visibility   mvt_body_vis.c: each track's silhouette and detection probability per camera
+ *                (field of view, nearer bodies, the rig's static occluders)
+ *   explain      mvt_body_explain.c: each blob as a head, a fragment of a body, a merged blob
+ *                of several people or clutter, by likelihood (Hungarian method, mvt_assoc)
+ *   update       mvt_body_update.c: state (mvt_pkf, or mvt_tri + mvt_cv for the triangulating
+ *                baseline) and existence
+ *   birth        mvt_body_birth.c: unexplained blobs in any number of views, with a prior on
+ *                head height; a lost label goes to the person found where it was lost
+ *   prune        mvt_body_prune.c: existence under its threshold, duplicates, the volume's walls
  * The caller owns the mvt_tracker_t (sizeof(mvt_tracker_t) bytes); nothing is allocated, nothing
  * is printed. Identities count up from 1 and are never given to another person (they wrap only
- * after 2^31 births); a person deleted moments before and born again keeps theirs (recover_s).
+ * after 2^31 births).
  *
  * Filters (mvt_tracker_config_t.filter):
  *   MVT_FILTER_PROJECTIVE   each camera's pixels update the 3D state directly (PKF family;
@@ -42,35 +41,12 @@ typedef enum mvt_filter {
     MVT_FILTER_TRIANGULATE = 1
 } mvt_filter_t;
 
-typedef enum mvt_merge {
-    MVT_MERGE_NEITHER = 0, /* a detection inside the gates of two tracks that are unresolved in its
-                              view updates neither when it is ambiguous (merge_ambiguity): the
-                              other views decide */
-    MVT_MERGE_SHARE = 1,   /* ... updates both, its covariance widened by D D^T / 3 (D: the image
-                              separation of the two predictions) */
-    MVT_MERGE_OFF = 2,     /* strict one-to-one assignment, no merged-blob handling */
-    MVT_MERGE_TOP = 3      /* the detector's own rule (docs/interfaces.md: the blob's top point): the detection
-                              belongs to the track whose predicted head is the higher in the image
-                              when the order is clear (2 sigma of the two predictions' v apart):
-                              the other is hidden in the blob; otherwise as MVT_MERGE_NEITHER */
-} mvt_merge_t;
-
 typedef enum mvt_gate {
     MVT_GATE_CHI2 = 0,  /* innovation y^T S^-1 y <= numerics.gate_chi2 (2 dof per camera) */
     MVT_GATE_PAPER = 1  /* Eq. 22-26: distance to the projected ellipsoid <= paper_delta */
 } mvt_gate_t;
 
 enum { MVT_TRACK_TENTATIVE = 1, MVT_TRACK_CONFIRMED = 2, MVT_TRACK_COASTING = 3 };
-
-/* How tracks are born, kept and ended (projective filters only; the triangulating baseline keeps
- * the rules). */
-typedef enum mvt_lifecycle {
-    MVT_LIFECYCLE_RULES = 0, /* timers and rules (mvt_trk_delete.c, mvt_trk_init.c, ...): hits in a
-                                window confirm, time unseen, hidden, contradicted deletes */
-    MVT_LIFECYCLE_BODY = 1   /* one model of a person (mvt_body.h): a head over a body, its
-                                visibility per camera, blobs explained as heads, fragments or
-                                clutter, a probability of existence that confirms and deletes */
-} mvt_lifecycle_t;
 
 /* The paper's gate (MVT_GATE_PAPER, Eq. 22-26). */
 typedef struct mvt_paper_gate {
@@ -80,78 +56,14 @@ typedef struct mvt_paper_gate {
     mvt_real delta;             /* Eq. 26 threshold on the normalised distance; default 1 */
 } mvt_paper_gate_t;
 
-/* The rules lifecycle's timers and thresholds (MVT_LIFECYCLE_RULES: `--lifecycle rules`, the
- * triangulating baseline and the particle filter's blob tracker; docs/tracking.md). The body model
- * reads none of them. */
-typedef struct mvt_rules_config {
-    mvt_real birth_reproj_sigma;/* births: max reprojection error per view, in units of the
-                                   detection's sigma; default 4 */
-    mvt_real birth_min_reproj_px;/* ... but never below this many pixels; default 4 */
-    int birth_min_views;        /* views that must agree for a birth, >= 2; default 2 */
-    mvt_real birth_min_sep_m;   /* no birth closer than this to an existing track; default 0.4 */
-    int seen_min_views;         /* a frame "sees" a track (a hit for confirmation; keeps it alive)
-                                   when at least this many cameras updated it (capped at the rig's
-                                   camera count), or one camera did and its position std is still
-                                   below seen_max_std_m on every axis, or every observed camera
-                                   whose picture holds the head did (where fewer cameras reach):
-                                   a lost track fed by one camera's clutter must not live on where
-                                   others should see it; >= 1, default 2 */
-    mvt_real seen_max_std_m;    /* >= 0, default 0 (off: one view can drag a track along its ray
-                                   while the std across the ray stays small) */
-    int confirm_hits;           /* M of the last confirm_window frames seen -> confirmed; 3 */
-    int confirm_window;         /* N, 1..32; default 5 */
-    int tentative_max_misses;   /* consecutive misses that delete a tentative track; default 2 */
-    mvt_real coast_max_s;       /* a confirmed track unseen this long is deleted; default 2.0 */
-    mvt_merge_t merge;          /* merged blobs (see mvt_merge_t); default MVT_MERGE_NEITHER */
-    mvt_real merge_width_m;     /* two tracks whose predicted image points in a view are closer
-                                   than this width seen at their depth are unresolved there; > 0,
-                                   default 0.5 */
-    mvt_real merge_ambiguity;   /* MVT_MERGE_NEITHER: a merged detection whose -2 log-likelihoods
-                                   for the two tracks differ by less than this is ambiguous and
-                                   updates neither; >= 0, default 4 (likelihood ratio e^2) */
-    mvt_real dup_dist_m;        /* two tracks closer than this in 3D are one target: the younger
-                                   is deleted; >= 0 (0: never), default 0.25 */
-    mvt_real exit_coast_s;      /* a track unseen this long within volume.exit_margin_m of the volume's
-                                   side walls is deleted (people leave through the sides); > 0,
-                                   default 0.3 */
-    int occlusion;              /* 1 (default): a confirmed track that a camera did not update
-                                   although its predicted head lies in the box of a blob that camera
-                                   gave to another track is taken as hidden in that blob: its image
-                                   column is constrained to the box (mvt_cv_truncate) and the
-                                   view counts toward keeping it alive (occluded_max_s); 0: off */
-    mvt_real occluded_max_s;    /* a track kept alive by occluded views alone is deleted after this
-                                   long neither seen nor needed by its hiding blobs' boxes (a person
-                                   right behind others leaves no trace in them: the guard against
-                                   phantoms in a group); > 0, default 10 */
-    int contra_views;           /* a track not seen this frame whose place is in no blob in at least
-                                   this many views (with boxes) is contradicted: it is not hidden
-                                   and it is not there; >= 1, default 2 */
-    mvt_real contra_max_s;      /* a track contradicted this long is deleted (twice this long where
-                                   the views' masks show foreground at its place); > 0, default 0.5 */
-    mvt_real exclusion_m;       /* two people's heads are at least this far apart horizontally: a
-                                   track seen in fewer than seen_min_views cameras this frame is kept
-                                   this far from every track seen in more (mvt_cv_truncate along
-                                   their horizontal separation); >= 0 (0: off), default 0.4 */
-    mvt_real recover_s;         /* identity recovery: a confirmed track deleted while its person may
-                                   still be in the room (unseen, hidden too long, contradicted, or
-                                   the duplicate that drifted onto another's person; not one that
-                                   left through a side wall or the volume, nor one too uncertain to
-                                   have a place) keeps its identity
-                                   this long, and a person born within walking reach of where it
-                                   was lost (init_vel_std_ms times the time since it last saw its
-                                   person, plus both covariances), at its head height, takes it
-                                   back (mvt_trk_recover.c); >= 0 (0: off), default 3 */
-} mvt_rules_config_t;
-
 /* The room: where people are tracked and where they leave it. */
 typedef struct mvt_volume {
     mvt_real min[3];            /* tracked volume, metres (rig file) */
     mvt_real max[3];
     mvt_real margin_m;          /* births and tracks may be this far outside; default 0.5 */
     mvt_real exit_margin_m;     /* the band along the volume's side walls through which people
-                                   leave, m: the body model lets a track there walk out
-                                   (population.exit_s), the rules delete one unseen there for
-                                   rules.exit_coast_s; >= 0, default 0.5 */
+                                   leave, m: a track there may walk out (population.exit_s);
+                                   >= 0, default 0.5 */
     int num_occluders;          /* static occluders the rig declares, 0..MVT_MAX_OCCLUDERS; default 0 */
     mvt_real occluder_min[MVT_MAX_OCCLUDERS > 0 ? MVT_MAX_OCCLUDERS : 1][3]; /* each an axis-aligned
                                    box (a desk, a shelf, a pillar), metres, max > min on every
@@ -177,7 +89,7 @@ typedef struct mvt_body_prior {
 /* The people as the model counts them: how often a camera reports one, how many false blobs it
  * sends, how often people come and go, and how sure a track must be to be shown or ended. */
 typedef struct mvt_population {
-    mvt_real p_detect;          /* MVT_LIFECYCLE_BODY: the prior of each camera's detection
+    mvt_real p_detect;          /* the prior of each camera's detection
                                    probability, which it learns online (MVT_BODY_PD_S). Rules:
                                    probability that a camera whose picture holds a person's head
                                    (not hidden) reports it: a detection within the birth radius,
@@ -192,7 +104,7 @@ typedef struct mvt_population {
                                    same way. Association weighs it too: a track's miss costs
                                    2 ln(p_detect / (1 - p_detect)) - 2 ln(2 pi lambda) against a
                                    detection's d^2 + ln |S| (mvt_trk_assoc.c) */
-    mvt_real clutter_per_frame; /* MVT_LIFECYCLE_BODY: a camera's false blobs per frame before it
+    mvt_real clutter_per_frame; /* a camera's false blobs per frame before it
                                    has been watched (then learnt online over MVT_BODY_CLUTTER_S),
                                    0.01..100; default 0.5 */
     mvt_real birth_per_s;       /* ... people entering the tracked volume per second, on average,
@@ -218,7 +130,6 @@ typedef struct mvt_tracker_config {
     mvt_filter_t filter;        /* default MVT_FILTER_PROJECTIVE */
     mvt_pkf_lin_t lin;          /* default MVT_PKF_JACOBIAN */
     mvt_gate_t gate;            /* default MVT_GATE_CHI2 */
-    mvt_lifecycle_t lifecycle;  /* default MVT_LIFECYCLE_BODY */
     /* the physical model */
     mvt_imm_config_t motion;    /* the motion models (mvt_imm.h): default mvt_imm_config_default,
                                    an IMM of standing, walking and manoeuvring people that needs no
@@ -232,7 +143,6 @@ typedef struct mvt_tracker_config {
     mvt_numerics_t numerics;    /* the estimator's bounds: gate, uncertainty, floor */
     /* other lifecycles and gates */
     mvt_paper_gate_t paper;     /* MVT_GATE_PAPER's parameters */
-    mvt_rules_config_t rules;   /* MVT_LIFECYCLE_RULES only */
 } mvt_tracker_config_t;
 
 /* One detection as the core needs it (raw distorted pixels). */
@@ -294,43 +204,27 @@ typedef struct mvt_counters {
     uint64_t updates;                 /* camera updates applied */
     uint64_t gated_out;               /* track-camera pairs whose best detection failed the gate */
     uint64_t behind_camera;           /* track-camera pairs skipped: point behind the camera */
-    uint64_t outside_picture;         /* track-camera pairs skipped: predicted image point more than
-                                         3 sigma outside the picture, or a spread wider than it */
     uint64_t numeric_faults;          /* covariance repaired or track dropped as non-PD */
     uint64_t births;
     uint64_t births_refused_full;     /* MVT_MAX_TARGETS reached */
     uint64_t deletions;               /* all deletions; by reason: */
-    uint64_t deleted_tentative;       /*   tentative track missed tentative_max_misses frames */
-    uint64_t deleted_unseen;          /*   confirmed track unseen for coast_max_s */
-    uint64_t deleted_exit;            /*   unseen for exit_coast_s near a side wall */
+    uint64_t deleted_exit;            /*   walked out through a side wall (population.exit_s) */
     uint64_t deleted_uncertain;       /*   position std above numerics.max_pos_std_m */
     uint64_t deleted_outside;         /*   left the volume (plus margin) */
-    uint64_t deleted_occluded;        /*   hidden, and neither seen nor needed, for occluded_max_s */
-    uint64_t deleted_contradicted;    /*   unseen and in no blob in contra_views views for contra_max_s */
-    uint64_t merged_updates;          /* MVT_MERGE_SHARE: updates from a detection shared by
-                                         unresolved tracks */
-    uint64_t merged_ambiguous;        /* MVT_MERGE_NEITHER: track-camera updates withheld because
-                                         the detection was inside an unresolved neighbour's gate */
-    uint64_t merged_top;              /* MVT_MERGE_TOP: detections moved to the higher of two
-                                         unresolved tracks */
-    uint64_t duplicates_deleted;      /* tracks deleted as duplicates (dup_dist_m) */
+    uint64_t duplicates_deleted;      /*   a second track on one person (mvt_body_prune.c) */
     uint64_t birth_candidates_dropped;/* multi-view birth candidates beyond MVT_MAX_BIRTH_CANDIDATES */
-    uint64_t occluded_updates;        /* track-camera pairs explained as hidden in another track's
-                                         blob and constrained to its box (occlusion) */
-    uint64_t exclusion_updates;       /* poorly seen tracks pushed out to exclusion_m from a seen one */
-    uint64_t births_refuted;          /* birth candidates refused: views that should see them show
-                                         their place empty (p_detect) */
-    uint64_t reacquired;              /* tracks lost for a while whose detections were chosen jointly
-                                         in 3D (mvt_trk_reacquire) */
-    uint64_t identities_recovered;    /* tracks confirmed with the identity of a track lost within
-                                         recover_s (identity recovery) */
-    uint64_t deleted_unlikely;        /* MVT_LIFECYCLE_BODY: existence fell under population.exist_delete */
-    uint64_t fragments;               /* MVT_LIFECYCLE_BODY: blobs explained as a fragment of a
+    uint64_t occluded_updates;        /* track-camera pairs explained as hidden in another body's
+                                         blob and constrained to its box */
+    uint64_t exclusion_updates;       /* tracks kept a body's width from a better-placed one */
+    uint64_t reacquired;              /* lost labels given to the person found where they were lost
+                                         (mvt_body_birth.c) */
+    uint64_t deleted_unlikely;        /*   existence fell under population.exist_delete */
+    uint64_t fragments;               /* blobs explained as a fragment of a
                                          tracked body (no update, no birth) */
-    uint64_t foot_updates;            /* MVT_LIFECYCLE_BODY: updates with a blob's visible feet */
+    uint64_t foot_updates;            /* updates with a blob's visible feet */
     uint64_t mask_top_updates;        /* track-camera updates with the top of the foreground in the
                                          track's own column, where no blob's reported top showed
-                                         the head (views with masks; mvt_trk_occl.c) */
+                                         the head (views with masks; mvt_body_update.c) */
 } mvt_counters_t;
 
 /* A person's appearance as the blobs' colour shows it (mvt_trk_app.c): the blob's mean hue h and
@@ -343,69 +237,28 @@ typedef struct mvt_app {
     mvt_real n;                 /* detections behind m (weighted, at most MVT_TRK_APP_NMAX) */
 } mvt_app_t;
 
-/* A lost identity kept for recovery (recover_s). */
-typedef struct mvt_lost {
-    int32_t id;                 /* 0: free */
-    int32_t reserved;           /* zero */
-    int64_t lost_us;            /* the last frame its track was seen (the reach counts from it) */
-    int64_t until_us;           /* kept until then */
-    mvt_real x[3];              /* position when deleted (x, y as predicted then; z the height the
-                                   last frame the track was seen) */
-    mvt_real P[9];              /* its covariance (3x3, row-major; z uncorrelated) */
-    mvt_app_t app;              /* its appearance */
-} mvt_lost_t;
-
-/* Lost identities kept at once (the one nearest its deadline gives way). */
-#ifndef MVT_MAX_LOST
-#define MVT_MAX_LOST 16
-#endif
-#if MVT_MAX_LOST < 1 || MVT_MAX_LOST > 1024
-#error "MVT_MAX_LOST must be in 1..1024"
-#endif
-
 typedef struct mvt_track {
     int32_t id;                 /* 0: free slot */
     int32_t status;
     mvt_cv_state_t s;           /* the estimate: the motion models' combination */
     mvt_imm_t imm;              /* each motion model's estimate and probability */
     uint32_t cameras_used;      /* this frame */
-    uint32_t cameras_occluded;  /* this frame: cameras that explained the track as hidden */
-    uint32_t cameras_uncovered; /* this frame: cameras in whose picture the track's place is in no
-                                   blob another track took (occlusion on, views with boxes only) */
-    uint32_t cameras_empty;     /* this frame: ... in no blob at all (evidence against the track) */
-    uint32_t cameras_fg;        /* this frame: cameras_uncovered whose foreground mask holds
-                                   something near the place */
-    uint32_t hit_history;       /* bit 0: this frame had an update, bit 1: previous, ... */
-    int32_t misses;             /* consecutive frames not seen (seen_min_views) */
     int64_t last_update_us;     /* last frame seen */
-    int64_t last_explained_us;  /* last frame seen, or seen and hidden in enough views */
-    int64_t last_consistent_us; /* last frame seen, or contradicted by fewer than contra_views */
-    int64_t last_unrefuted_us;  /* ... not counting views whose mask shows foreground at the place */
-    int64_t last_needed_us;     /* last frame seen, or hidden where the blobs' boxes need the person */
-    mvt_real need_llr;          /* the boxes' evidence for a hidden track's person: log-likelihood
-                                   ratio of the hiding blobs' edges, with against without them,
-                                   forgotten with time constant MVT_TRK_NEED_MEMORY_S */
-    mvt_real exist_llr;         /* tentative: log-likelihood ratio, person against clutter, of the
-                                   detections in its gates since its birth frame (mvt_trk_delete);
-                                   confirmed: the log odds that its person is there, the same
-                                   evidence through a chain that forgets (mvt_trk_existence) */
     mvt_real seen_z, seen_zz;   /* head height and its variance the last frame seen: a coasting
                                    track's height spreads with the motion models' vertical noise,
-                                   a person's does not (identity recovery compares this) */
-    mvt_lost_t held;            /* tentative track born with a lost identity (held.id == id): the
-                                   record it took, given back if the track dies tentative */
+                                   a person's does not (a lost label's heir is compared with this) */
     mvt_app_t app;              /* its appearance (blobs with colour only) */
     uint32_t cameras_placed;      /* this frame: cameras whose detection updated the track as
                                      the person's (not judged displaced) */
     uint32_t cameras_placed_prev; /* ... the frame before */
     mvt_imm_view_t view[MVT_MAX_CAMERAS]; /* per camera: was its last detection displaced, and by
                                              how much (mvt_imm_update_view) */
-    mvt_real exist_lo;          /* MVT_LIFECYCLE_BODY: log odds that its person is in the volume */
-    int32_t dormant;            /* MVT_LIFECYCLE_BODY: 1 when its existence fell under population.exist_delete
+    mvt_real exist_lo;          /* log odds that its person is in the volume */
+    int32_t dormant;            /* 1 when its existence fell under population.exist_delete
                                    after it was shown: its label waits MVT_BODY_DORMANT_S for the
                                    person to be found again (mvt_body_birth.c), unseen and unshown */
-    int32_t was_shown;          /* MVT_LIFECYCLE_BODY: 1 once it has been shown confirmed */
-    mvt_real one_view_s;        /* MVT_LIFECYCLE_BODY: seconds since two or more views last placed it
+    int32_t was_shown;          /* 1 once it has been shown confirmed */
+    mvt_real one_view_s;        /* seconds since two or more views last placed it
                                    in one frame (since its birth when none ever did) */
 } mvt_track_t;
 
@@ -417,7 +270,7 @@ typedef struct mvt_track {
 #error "MVT_MAX_BIRTH_CANDIDATES must be in 1..4096"
 #endif
 
-/* MVT_LIFECYCLE_BODY's workspace (mvt_body.h): what one camera's pass computes for its steps, and
+/* The body model's workspace (mvt_body.h): what one camera's pass computes for its steps, and
  * the frame's birth material. Rebuilt every frame; nothing in it outlives the frame. */
 typedef struct mvt_body_cand {
     mvt_real x[3];                      /* head top, m */
@@ -480,14 +333,6 @@ typedef struct mvt_body_ws {
                                               heads it may show (a lower bound of its clutter) */
 } mvt_body_ws_t;
 
-typedef struct mvt_birth_cand {
-    int16_t n;                          /* views */
-    int16_t empty;                      /* views with boxes that show its place in no blob */
-    int16_t cam[MVT_MAX_CAMERAS];
-    int16_t det[MVT_MAX_CAMERAS];
-    mvt_real err_px;                    /* summed reprojection error */
-} mvt_birth_cand_t;
-
 typedef struct mvt_tracker {
     mvt_tracker_config_t cfg;
     int num_cameras;
@@ -497,55 +342,18 @@ typedef struct mvt_tracker {
     int64_t last_utime_us;
     int have_time;
     mvt_counters_t counters;
-    mvt_lost_t lost[MVT_MAX_LOST];     /* identities kept for recovery */
     /* per-frame workspaces (no state carried between frames) */
     mvt_pkf_meas_t meas[MVT_MAX_CAMERAS][MVT_MAX_DETECTIONS];
     uint8_t meas_ok[MVT_MAX_CAMERAS][MVT_MAX_DETECTIONS];
     mvt_real chroma[MVT_MAX_CAMERAS][MVT_MAX_DETECTIONS][2]; /* the detection's colour (mvt_app_t) */
     uint8_t chroma_ok[MVT_MAX_CAMERAS][MVT_MAX_DETECTIONS];  /* ... sent and valid */
-    mvt_real app_shift[MVT_MAX_TARGETS];  /* the least colour cost of each track (mvt_trk_assoc.c) */
-    uint8_t used[MVT_MAX_CAMERAS][MVT_MAX_DETECTIONS];
     int num_meas[MVT_MAX_CAMERAS];
-    mvt_real cost[MVT_MAX_TARGETS][MVT_MAX_DETECTIONS]; /* < 0: outside the gate */
-    mvt_pkf_pred_t pred[MVT_MAX_TARGETS];
-    uint8_t pred_ok[MVT_MAX_TARGETS];
-    int16_t merge_nb[MVT_MAX_TARGETS];       /* nearest unresolved track in this view, or -1 */
-    mvt_real merge_cov[MVT_MAX_TARGETS][3];  /* extra measurement covariance, px^2 */
-    uint8_t merge_wide[MVT_MAX_TARGETS];     /* the update with this view's detection adds merge_cov */
-    int16_t cluster[MVT_MAX_TARGETS];        /* union-find parent */
-    int16_t det_first[MVT_MAX_DETECTIONS];   /* first track gating detection d, or -1 */
-    int16_t cl_rows[MVT_MAX_TARGETS];
-    int16_t cl_cols[MVT_MAX_DETECTIONS];
-    int cl_assign[MVT_MAX_TARGETS];
-    mvt_real cl_cost[MVT_ASSOC_MAX_ROWS * MVT_ASSOC_MAX_COLS];
+    mvt_pkf_pred_t pred[MVT_MAX_TARGETS];    /* this camera: each track's predicted head */
+    uint8_t pred_ok[MVT_MAX_TARGETS];        /* ... made */
+    mvt_real cl_cost[MVT_ASSOC_MAX_ROWS * MVT_ASSOC_MAX_COLS]; /* a cost matrix for mvt_assoc */
     mvt_assoc_ws_t assoc_ws;
-    mvt_birth_cand_t cand[MVT_MAX_BIRTH_CANDIDATES];
-    int num_cand;
-    /* re-acquisition (mvt_trk_reacquire): the detection camera k must give track t, or -1 */
-    int16_t reacq_det[MVT_MAX_TARGETS][MVT_MAX_CAMERAS];
-    uint8_t reacq_any;                     /* some track holds a reservation this frame */
-    uint8_t claimed[MVT_MAX_CAMERAS][MVT_MAX_DETECTIONS];
-    int16_t rq_cand[MVT_MAX_DETECTIONS];   /* distinct candidates: index into cand */
-    mvt_real rq_x[MVT_MAX_DETECTIONS][3];
-    mvt_real rq_cov[MVT_MAX_DETECTIONS][9];
-    mvt_real rq_tx[MVT_MAX_TARGETS][3];    /* tracks predicted to the frame time: position */
-    mvt_real rq_tP[MVT_MAX_TARGETS][9];    /* ... and its covariance */
-    /* per camera this frame (mvt_trk_evidence_weights): */
-    uint8_t ev_boxes[MVT_MAX_CAMERAS];     /* the view sends boxes */
-    mvt_real ev_support[MVT_MAX_CAMERAS];  /* log-likelihood ratio of a detection at the place */
-    mvt_real ev_empty;                     /* ... of the place in no blob, ln(1 - p_detect) < 0 */
-    mvt_real ev_clutter[MVT_MAX_CAMERAS];  /* clutter density: the view's detections (every one
-                                              possibly clutter, at least one) per pixel^2 */
-    mvt_real ev_llr[MVT_MAX_TARGETS];      /* this frame's existence evidence of each track */
-    uint32_t visible[MVT_MAX_TARGETS];     /* this frame: the observed cameras whose picture holds
-                                              each track's predicted head (mvt_trk_delete) */
-    mvt_pkf_meas_t top_meas[MVT_MAX_TARGETS]; /* this camera: the head measured as the top of the
-                                                 foreground in the track's column (mvt_trk_occl.c) */
-    uint8_t top_ok[MVT_MAX_TARGETS];          /* ... found, inside the gate, nobody else's */
-    mvt_real birth_rate;        /* births tried per frame, averaged over MVT_TRK_BIRTH_RATE_S
-                                   (mvt_trk_init.c: the prior odds of a new track) */
-    int64_t birth_rate_us;      /* the frame it was last updated, 0: never */
-    mvt_real clutter_n[MVT_MAX_CAMERAS]; /* MVT_LIFECYCLE_BODY: each camera's false blobs per
+    /* what the tracker learns of each camera (persisted) */
+    mvt_real clutter_n[MVT_MAX_CAMERAS]; /* each camera's false blobs per
                                             frame, learnt (mvt_body.c) */
     mvt_real p_detect_k[MVT_MAX_CAMERAS]; /* ... and its detection probability of a visible head,
                                              learnt (mvt_body_update.c); 0: not yet */
@@ -560,9 +368,9 @@ typedef struct mvt_tracker {
     mvt_real p_bg_k[MVT_MAX_CAMERAS];     /* ... and the chance that its mask shows background all
                                              around a visible head, learnt (mvt_body_update.c); 0: not
                                              yet */
-    mvt_real frame_dt_s;                  /* MVT_LIFECYCLE_BODY: the typical time between frames, s
+    mvt_real frame_dt_s;                  /* the typical time between frames, s
                                              (mvt_body.c); 0: not yet. Not persisted */
-    mvt_body_ws_t body;         /* MVT_LIFECYCLE_BODY's workspace */
+    mvt_body_ws_t body;         /* the body model's workspace */
 } mvt_tracker_t;
 
 /* Fills cfg with the documented defaults (volume: a 10 m cube around the origin, z >= 0). */
@@ -588,7 +396,7 @@ int mvt_tracker_select(const mvt_tracker_t *self, int cam, const mvt_detection_t
                        int keep[MVT_MAX_DETECTIONS]);
 
 /* What a tracker carries from one frame to the next, and nothing else: its tracks, the next
- * identity, the identities kept for recovery, its clock and its counters (the configuration and
+ * identity, its clock, its counters and what it learnt of each camera (the configuration and
  * cameras come from the caller, the
  * workspaces are rebuilt every frame). Pointer-free and fixed-size, so a caller may store it as
  * bytes (a daemon's checkpoint) and give it back to a tracker built with the same configuration. */
@@ -598,9 +406,6 @@ typedef struct mvt_tracker_persist {
     int32_t have_time;
     int64_t last_utime_us;
     mvt_counters_t counters;
-    mvt_lost_t lost[MVT_MAX_LOST];
-    mvt_real birth_rate;
-    int64_t birth_rate_us;
     mvt_real clutter_n[MVT_MAX_CAMERAS];
     mvt_real p_detect_k[MVT_MAX_CAMERAS];
     mvt_real p_hidden_k[MVT_MAX_CAMERAS];
@@ -618,7 +423,7 @@ void mvt_tracker_save(const mvt_tracker_t *self, mvt_tracker_persist_t *out);
  * next_id, statuses known, states finite with a positive-definite covariance, every time at or
  * before the saved clock. MVT_ERR_INVALID leaves the tracker unchanged.
  * unobserved_us >= 0 is time during which nobody watched (the process was down): the tracks'
- * "last seen / explained / consistent" clocks move forward by it, so an outage is not taken as
+ * "last seen" clocks move forward by it, so an outage is not taken as
  * evidence that people left; the filters still predict across the whole time (their covariance
  * grows with it). O(MVT_MAX_TARGETS). */
 mvt_err_t mvt_tracker_resume(mvt_tracker_t *self, const mvt_tracker_persist_t *p, int64_t unobserved_us);

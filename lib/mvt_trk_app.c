@@ -122,15 +122,6 @@ void mvt_trk_app_update(mvt_app_t *app, const mvt_real a[2])
     app->n = n;
 }
 
-mvt_real mvt_trk_app_obs_cost(const mvt_app_t *app, const mvt_app_obs_t *obs)
-{
-    mvt_real c = MVT_R(0.0);
-    for (int i = 0; obs != NULL && i < obs->n; i++) {
-        c += mvt_trk_app_cost(app, obs->a[i]);
-    }
-    return c;
-}
-
 int mvt_trk_app_ok(const mvt_app_t *app)
 {
     const mvt_real floor = MVT_TRK_APP_SD_MIN * MVT_TRK_APP_SD_MIN;

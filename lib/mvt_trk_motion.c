@@ -2,8 +2,8 @@
  * mvt_trk_motion.c - a track's motion model: every change the tracker makes to a track's
  * estimate goes through here. With one constant-velocity model the estimate is tr->s itself
  * (mvt_cv, mvt_pkf: bit for bit the single filter); with an IMM bank (mvt_imm.h) each operation
- * acts on every model and tr->s is their combination, which is what association, occlusion,
- * deletion and the output read.
+ * acts on every model and tr->s is their combination, which is what the body model's steps and
+ * the output read.
  */
 #include <string.h>
 
@@ -46,17 +46,6 @@ void mvt_trk_settle(mvt_tracker_t *self, mvt_track_t *tr)
 {
     if (!single(self)) {
         mvt_imm_combine(&tr->imm, &self->cfg.motion, &tr->s);
-    }
-}
-
-void mvt_trk_predicted(const mvt_tracker_t *self, const mvt_track_t *tr, int64_t utime_us, mvt_cv_state_t *out)
-{
-    *out = tr->s;
-    if (single(self)) {
-        (void)mvt_cv_predict_to(out, utime_us, self->cfg.motion.model[0].q);
-    } else {
-        mvt_imm_t imm = tr->imm;
-        (void)mvt_imm_predict_to(&imm, &self->cfg.motion, utime_us, out);
     }
 }
 

@@ -21,7 +21,6 @@ static void init_body_with(mvt_camera_t cams[5], int n_cams, const double *lo, c
     assert_int_equal(test_room_cameras(cams, 1), 0);
     mvt_tracker_config_t cfg;
     mvt_tracker_config_default(&cfg);
-    cfg.lifecycle = MVT_LIFECYCLE_BODY;
     cfg.volume.min[0] = 0; cfg.volume.min[1] = 0; cfg.volume.min[2] = 0;
     cfg.volume.max[0] = 6; cfg.volume.max[1] = 5; cfg.volume.max[2] = 2.5f;
     if (lo != NULL) {
@@ -298,7 +297,6 @@ static void test_body_config_out_of_range_rejected(void **state)
     assert_int_equal(test_room_cameras(cams, 0), 0);
     mvt_tracker_config_t cfg;
     mvt_tracker_config_default(&cfg);
-    cfg.lifecycle = MVT_LIFECYCLE_BODY;
     assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, cams, 5), MVT_OK);
     mvt_tracker_config_t bad = cfg;
     bad.body.head_height_m = 0.5f;
@@ -308,9 +306,6 @@ static void test_body_config_out_of_range_rejected(void **state)
     assert_int_equal(mvt_tracker_init(&g_tracker, &bad, cams, 5), MVT_ERR_INVALID);
     bad = cfg;
     bad.population.birth_per_s = 0.0f;
-    assert_int_equal(mvt_tracker_init(&g_tracker, &bad, cams, 5), MVT_ERR_INVALID);
-    bad = cfg;
-    bad.lifecycle = (mvt_lifecycle_t)7;
     assert_int_equal(mvt_tracker_init(&g_tracker, &bad, cams, 5), MVT_ERR_INVALID);
     bad = cfg;
     bad.volume.num_occluders = 1;

@@ -1,9 +1,9 @@
 /*
  * libFuzzer target: message decoding + frame assembly + tracking, through the daemon's own engine
- * (mvtd_handle), in the PKF (both lifecycles) and the particle-filter modes.
+ * (mvtd_handle), in the PKF, the triangulating baseline and the particle-filter modes.
  *
  * Input: records [h][n_hi][n_lo][n bytes]. The first byte of the input picks the mode: bit 0 set,
- * pf; otherwise bit 1 set, pkf with --lifecycle body; otherwise pkf. For each record: unless h & 0x80, the camera_frame_t fingerprint is put in
+ * pf; otherwise bit 1 set, kf; otherwise pkf. For each record: unless h & 0x80, the camera_frame_t fingerprint is put in
  * front of the n bytes (so the fuzzer spends its time past the hash check; with h & 0x80 the raw
  * bytes are the whole message); (h & 0x07) picks the channel (rig camera k, or a stranger's).
  * Invariants checked after every record: tracks within capacity, every published number finite,
@@ -21,7 +21,7 @@
 #include "mvtd.h"
 #include "mvtrack_camera_frame_t.h"
 
-static mvtd_t g_pkf, g_pf, g_body;
+static mvtd_t g_pkf, g_pf, g_kf;
 static int g_ready;
 
 int LLVMFuzzerInitialize(int *argc, char ***argv);
@@ -33,7 +33,7 @@ int LLVMFuzzerInitialize(int *argc, char ***argv)
     (void)argv;
     fuzz_configure(&g_pkf, "pkf");
     fuzz_configure(&g_pf, "pf");
-    fuzz_configure_lifecycle(&g_body, "pkf", "body");
+    fuzz_configure(&g_kf, "kf");
     g_ready = 1;
     return 0;
 }
@@ -44,7 +44,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (!g_ready || size < 1) {
         return 0;
     }
-    mvtd_t *d = (data[0] & 1u) ? &g_pf : (data[0] & 2u) ? &g_body : &g_pkf;
+    mvtd_t *d = (data[0] & 1u) ? &g_pf : (data[0] & 2u) ? &g_kf : &g_pkf;
     /* a fresh engine state per input would cost a rig load; instead the engine runs on across
      * inputs, as the daemon does across messages: capacity and time handling get exercised too */
     const int64_t hash = __mvtrack_camera_frame_t_get_hash();

@@ -11,9 +11,8 @@
 
 #include "mvtd.h"
 
-/* mvtd_configure in mode (pf modes with 64 particles) with the PKF lifecycle given (rules or body),
- * quiet; aborts when it fails. */
-static inline void fuzz_configure_lifecycle(mvtd_t *d, const char *mode, const char *lifecycle)
+/* mvtd_configure in mode (pf modes with 64 particles), quiet; aborts when it fails. */
+static inline void fuzz_configure(mvtd_t *d, const char *mode)
 {
     const char *rig = getenv("MVTRACK_FUZZ_RIG");
     if (rig == NULL) {
@@ -21,16 +20,11 @@ static inline void fuzz_configure_lifecycle(mvtd_t *d, const char *mode, const c
         abort();
     }
     char *argv[] = {"mvtrackd", "--rig", (char *)rig, "--mode", (char *)mode, "--particles", "64", "--in",
-                    "file:///dev/null", "--out", "file:///dev/null", "--lifecycle", (char *)lifecycle, NULL};
-    if (mvtd_configure(d, 13, argv) != MVTD_CONTINUE) {
+                    "file:///dev/null", "--out", "file:///dev/null", NULL};
+    if (mvtd_configure(d, 11, argv) != MVTD_CONTINUE) {
         abort();
     }
     d->quiet = 1;
-}
-
-static inline void fuzz_configure(mvtd_t *d, const char *mode)
-{
-    fuzz_configure_lifecycle(d, mode, "rules");
 }
 
 /* Aborts unless the last output is within capacity and every number in it is finite. */

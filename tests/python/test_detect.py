@@ -153,7 +153,7 @@ def test_vtest_whole_sequence_against_the_public_ground_truth():
 
 
 def test_vtest_in_3d_with_one_camera(tmp_path):
-    """vtest.avi through mvtrack-detect and mvtrackd --lifecycle body with its one camera, scored on
+    """vtest.avi through mvtrack-detect and mvtrackd with its one camera, scored on
     the ground plane at 1 m against the PETS 2009 S2.L1 annotation (where the project's reference
     data is present): MOTA >= 0.82 over all 795 frames and >= 0.86 on frames 400-794 (the half not
     looked at while the model was built), at most 25 identity switches."""
@@ -163,7 +163,7 @@ def test_vtest_in_3d_with_one_camera(tmp_path):
         pytest.skip(f"{vtest3d.GT} is not on this machine")
     if not vtest3d.VTEST.exists():
         pytest.fail(f"{vtest3d.VTEST} missing: tools/mvtrack setup installs opencv-doc")
-    out = subprocess.run([str(REPO / "tools" / "mvtrack"), "vtest3d", "--daemon-args", "--lifecycle body", "--out",
+    out = subprocess.run([str(REPO / "tools" / "mvtrack"), "vtest3d", "--out",
                           str(tmp_path), "--json"], capture_output=True, text=True, timeout=300)
     assert out.returncode == 0, out.stderr
     r = json.loads(out.stdout.strip().splitlines()[-1])

@@ -278,7 +278,7 @@ def test_daemon_false_alarm_flood_counted_tracks_kept(tmp_path, daemon_path, see
 @pytest.mark.daemon
 @pytest.mark.parametrize("model,seed", [("rows", 4), ("camouflage", 4)])
 def test_daemon_body_model_on_broken_silhouettes(tmp_path, daemon_path, model, seed):
-    """--lifecycle body on rendered masks whose connected components break the bodies (rows: cut
+    """The PKF tracker on rendered masks whose connected components break the bodies (rows: cut
     at the same image rows in every camera; camouflage: a shirt or trousers the colour of the
     background), the interaction scene, seeds the model was not developed on (its development used
     1-3): every person tracked, no switch, no track in a person's column below the head
@@ -291,7 +291,7 @@ def test_daemon_body_model_on_broken_silhouettes(tmp_path, daemon_path, model, s
                     "--seed", str(seed), "--rig", str(rig), "--log", str(log), "--quiet"], check=True, env=env,
                    timeout=600)
     r = subprocess.run([str(daemon_path), "--rig", str(rig), "--in", f"file://{log}?speed=0", "--out",
-                        f"file://{out}?mode=w", "--lifecycle", "body"], capture_output=True, text=True, timeout=300)
+                        f"file://{out}?mode=w"], capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stderr
     frames = pair_frames(read_log(str(log), lambda c: c == "GROUND_TRUTH"), read_log(str(out), lambda c: c == "TRACKS"))
     res = clear_mot(frames)

@@ -185,9 +185,8 @@ def test_state_live_restart_keeps_identities_never_reuses(tmp_path, daemon_path,
 def test_state_outage_identities_over_30_scenes(tmp_path, daemon_path):
     """5 people walking a 6 x 5 m room, keeping their personal space, the log cut at 6 s and 1.5 s
     of it removed (an outage the restarted daemon did not see), 30 seeds (tools/mvtrack restart
-    --offline 30 --down 1.5). Measured with the body model (the default): 148 of 150 people keep
-    their identity and 2 identities go to another person; with the rules (--lifecycle rules) 145
-    of 150 and 2."""
+    --offline 30 --down 1.5). Measured: 148 of 150 people keep their identity and 2 identities go
+    to another person."""
     kept = present = reused = 0
     for seed in range(1, 31):
         r = restart.offline(seed, 1.5, 6.0, 14.0, tmp_path)

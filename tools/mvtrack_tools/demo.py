@@ -126,9 +126,9 @@ def main(argv: list[str] | None = None) -> int:
     sc = read_log(str(log_path), lambda c: c == "GROUND_TRUTH")
     paths = {}
     print("[demo] offline replay of the recorded detections:")
-    print(f"        (pkf: the defaults; pkf-rules: --lifecycle rules; the others with q learnt from ground truth: {qs})")
+    print(f"        (pkf: the defaults; the others with q learnt from ground truth: {qs})")
     print("        mode           mean (mm)  std (mm)  matched")
-    for mode in ("pkf", "pkf-rules", "pkf-learnt-q", "pkf-paper", "pkf-centred", "kf"):
+    for mode in ("pkf", "pkf-learnt-q", "pkf-paper", "pkf-centred", "kf"):
         tr = out / f"replay_{mode}.lcm"
         run_daemon(rig_path, log_path, tr, mode, q)
         rr = evaluate_single(str(log_path), str(tr), rig, None)

@@ -27,19 +27,17 @@ from .scenes import WalkModel
 from .simulate import experiment1, write_scene
 
 LEVELS = [50.0, 100.0, 150.0, 200.0, 250.0, 300.0]
-MODES = ["pkf", "pkf-rules", "pkf-learnt-q", "pkf-paper", "pkf-centred", "kf"]
+MODES = ["pkf", "pkf-learnt-q", "pkf-paper", "pkf-centred", "kf"]
 
 
 def run_daemon(rig: Path, scene: Path, out: Path, mode: str, q: np.ndarray | None,
                extra: list[str] | None = None) -> None:
-    """`pkf` is the daemon's default (the IMM, nothing learnt, one model of a person); `pkf-rules` the
-    same with the rules' lifecycle (--lifecycle rules; `pkf-body`, the default's old name, is `pkf`);
-    `pkf-learnt-q` the single constant-velocity PKF with q learnt from ground truth; the paper's
-    variants and the baseline use the learnt q as the paper does."""
-    args = [] if mode in ("pkf", "pkf-body") else ["--lifecycle", "rules"] if mode == "pkf-rules" else \
-        ["--q", ",".join(f"{x:.6g}" for x in q)]
+    """`pkf` is the daemon's default (the IMM, nothing learnt); `pkf-learnt-q` the single
+    constant-velocity PKF with q learnt from ground truth; the paper's variants and the baseline use
+    the learnt q as the paper does."""
+    args = [] if mode == "pkf" else ["--q", ",".join(f"{x:.6g}" for x in q)]
     cmd = [str(DAEMON), "--rig", str(rig), "--mode",
-           "pkf" if mode in ("pkf-learnt-q", "pkf-body", "pkf-rules") else mode] + args + [
+           "pkf" if mode == "pkf-learnt-q" else mode] + args + [
            "--in", f"file://{scene}?speed=0", "--out", f"file://{out}?mode=w"] + (extra or [])
     r = subprocess.run(cmd, capture_output=True, text=True)
     if r.returncode != 0:

@@ -11,7 +11,7 @@ rows (also, every body cut on a few fixed bands of image rows per camera), camou
 person's trousers or shirt match the background).
 
     tools/mvtrack fragments [--models holes rows camouflage] [--scenes interaction crowd] [--seeds 3]
-                            [--daemon-args "--lifecycle rules"] [--out out/fragments] [--json]
+                            [--daemon-args "--mode kf"] [--out out/fragments] [--json]
 """
 from __future__ import annotations
 

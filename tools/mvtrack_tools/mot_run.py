@@ -6,9 +6,9 @@
 
 For each scene and seed: simulate (tools/mvtrack simulate), run mvtrackd offline on the log, score
 CLEAR MOT and OSPA (mvtrack_tools.mot), write a zenithal plot and a timeline per run. Prints a
-table and writes summary.json. `--merge` runs the daemon's merged-blob policies side by side.
+table and writes summary.json.
 
-    tools/mvtrack mot [--seeds 3] [--merge neither share off top] [--daemon-args ARGS] [--out out/mot]
+    tools/mvtrack mot [--seeds 3] [--daemon-args ARGS] [--out out/mot]
 """
 from __future__ import annotations
 
@@ -60,7 +60,7 @@ def run_scenes(ap: argparse.ArgumentParser, a: argparse.Namespace, run_one, *arg
     return rows
 
 
-def run_one(out: Path, kind: str, seed: int, merges: list[str], plot: bool, extra: list[str] | None = None,
+def run_one(out: Path, kind: str, seed: int, plot: bool, extra: list[str] | None = None,
             rig=None) -> list[dict]:
     rig = rig or smartroom()
     rig_path = out / "rig.yaml"
@@ -70,31 +70,27 @@ def run_one(out: Path, kind: str, seed: int, merges: list[str], plot: bool, extr
     write_multi(w, scene, frames, progress=False)
     w.close()
     sc = read_log(str(log), lambda c: c == "GROUND_TRUTH")
-    rows = []
-    for merge in merges:
-        trk_path = out / "logs" / f"{kind}_{seed}_{merge}_tracks.lcm"
-        run_daemon(rig_path, log, trk_path, "pkf", Q, ["--merge", merge] + (extra or []))
-        tr = read_log(str(trk_path), lambda c: c in ("TRACKS", "MVTRACK_STATUS"))
-        fr = pair_frames(sc, tr, rig.frame_rate)
-        r = as_dict(clear_mot(fr))
-        views = views_per_person(rig, fr)
-        n_gt = sum(len(v) for v in views)
-        cov = clear_mot(covered_only(fr, views))
-        r.update(gt_under_2_views_pct=100.0 * sum(int((v < 2).sum()) for v in views) / max(1, n_gt),
-                 mota_covered=cov.mota, id_switches_covered=cov.id_switches, idf1_covered=cov.idf1)
-        st = tr.status[-1] if tr.status else None
-        if st is not None:
-            r.update(births=st.births, merged_withheld=st.updates_merged_withheld,
-                     merged_shared=st.updates_merged_shared)
-        r.update(scene=kind, seed=seed, merge=merge, **{f"sim_{k}": v for k, v in scene.info.items()})
-        rows.append(r)
-        if plot:
-            name = f"{kind}_{seed}_{merge}"
-            ttl = (f"{kind} seed {seed}, --merge {merge}: MOTA {r['mota']:.3f}, MOTP {r['motp_mm']:.0f} mm, "
-                   f"{r['id_switches']} ID switches")
-            plots.zenithal_multi(out / f"{name}_zenithal.png", rig, sc, tr, ttl)
-            plots.timeline(out / f"{name}_timeline.png", sc, tr, rig.frame_rate, ttl)
-    return rows
+    trk_path = out / "logs" / f"{kind}_{seed}_tracks.lcm"
+    run_daemon(rig_path, log, trk_path, "pkf", Q, extra or [])
+    tr = read_log(str(trk_path), lambda c: c in ("TRACKS", "MVTRACK_STATUS"))
+    fr = pair_frames(sc, tr, rig.frame_rate)
+    r = as_dict(clear_mot(fr))
+    views = views_per_person(rig, fr)
+    n_gt = sum(len(v) for v in views)
+    cov = clear_mot(covered_only(fr, views))
+    r.update(gt_under_2_views_pct=100.0 * sum(int((v < 2).sum()) for v in views) / max(1, n_gt),
+             mota_covered=cov.mota, id_switches_covered=cov.id_switches, idf1_covered=cov.idf1)
+    st = tr.status[-1] if tr.status else None
+    if st is not None:
+        r.update(births=st.births, fragments=st.fragments)
+    r.update(scene=kind, seed=seed, **{f"sim_{k}": v for k, v in scene.info.items()})
+    if plot:
+        name = f"{kind}_{seed}"
+        ttl = (f"{kind} seed {seed}: MOTA {r['mota']:.3f}, MOTP {r['motp_mm']:.0f} mm, "
+               f"{r['id_switches']} ID switches")
+        plots.zenithal_multi(out / f"{name}_zenithal.png", rig, sc, tr, ttl)
+        plots.timeline(out / f"{name}_timeline.png", sc, tr, rig.frame_rate, ttl)
+    return [r]
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -103,10 +99,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", type=Path, default=Path("out/mot"), help="output folder (default out/mot)")
     ap.add_argument("--seeds", type=int, default=3, help="seeds per scene (default 3)")
     ap.add_argument("--scenes", nargs="+", default=["crowd", "interaction"], choices=["crowd", "interaction"])
-    ap.add_argument("--merge", nargs="+", default=["neither"], choices=["neither", "share", "off", "top"],
-                    help="daemon merged-blob policies to compare (default: neither, the daemon's default)")
     ap.add_argument("--daemon-args", default="", metavar="ARGS",
-                    help="more mvtrackd options for every run, e.g. \"--occlusion off --exclusion 0\"")
+                    help="more mvtrackd options for every run, e.g. \"--mode kf\"")
     ap.add_argument("--rig-seed", type=int, default=0, metavar="N",
                     help="0 (default): the smart room; N: a random room and rig from seed N")
     ap.add_argument("--cameras", type=int, default=5, help="cameras of a --rig-seed rig (default 5)")
@@ -116,13 +110,13 @@ def main(argv: list[str] | None = None) -> int:
     out = a.out
     if a.cameras < 2 or a.cameras > 8:
         ap.error("--cameras must be 2..8")
-    rows = run_scenes(ap, a, run_one, a.merge, not a.no_plots, shlex.split(a.daemon_args), rig_of(a))
-    rows.sort(key=lambda r: (r["scene"], r["merge"], r["seed"]))
+    rows = run_scenes(ap, a, run_one, not a.no_plots, shlex.split(a.daemon_args), rig_of(a))
+    rows.sort(key=lambda r: (r["scene"], r["seed"]))
     (out / "summary.json").write_text(json.dumps(rows, indent=1, default=float))
-    print(f"{'scene':12s} {'merge':8s} {'seed':>4s} {'MOTA':>6s} {'MOTP mm':>8s} {'IDsw':>5s} {'IDF1':>6s} "
+    print(f"{'scene':12s} {'seed':>4s} {'MOTA':>6s} {'MOTP mm':>8s} {'IDsw':>5s} {'IDF1':>6s} "
           f"{'FP':>5s} {'miss':>5s} {'OSPA m':>7s} {'ids':>4s} {'<2cam%':>6s} {'MOTA2':>6s}")
     for r in rows:
-        print(f"{r['scene']:12s} {r['merge']:8s} {r['seed']:4d} {r['mota']:6.3f} {r['motp_mm']:8.1f} "
+        print(f"{r['scene']:12s} {r['seed']:4d} {r['mota']:6.3f} {r['motp_mm']:8.1f} "
               f"{r['id_switches']:5d} {r['idf1']:6.3f} {r['false_positives']:5d} {r['misses']:5d} "
               f"{r['ospa_m']:7.3f} {r['track_ids']:4d} {r['gt_under_2_views_pct']:6.1f} {r['mota_covered']:6.3f}")
     print("<2cam%: ground-truth person-frames in fewer than 2 cameras' pictures; MOTA2: MOTA with those as "

@@ -43,8 +43,7 @@ from .rig import smartroom
 
 Q = np.array([0.5, 0.5, 0.05])
 PAPER = ["--particle-model", "point", "--exclusion", "0", "--pixels", "independent"]
-RUNS = [("pkf", "pkf", []), ("pkf (occlusion off)", "pkf", ["--occlusion", "off", "--exclusion", "0"]),
-        ("MS (paper)", "pf-ms", PAPER), ("MS+C (paper)", "pf", PAPER),
+RUNS = [("pkf", "pkf", []), ("MS (paper)", "pf-ms", PAPER), ("MS+C (paper)", "pf", PAPER),
         ("MS+C point", "pf", ["--particle-model", "point"]), ("MS", "pf-ms", []), ("MS+C", "pf", [])]
 
 

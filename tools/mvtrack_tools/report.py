@@ -242,7 +242,7 @@ def vtest3d(out: Path, quick: bool, quiet: bool):
 
 def bench(out: Path, quick: bool, quiet: bool):
     names = ["filter_update_5cam", "tracker_frame_5cam_1target", "tracker_frame_8cam_16people",
-             "tracker_frame_8cam_16people_masks", "tracker_frame_8cam_16people_rules", "pf_frame_5cam_4targets", "detect_frame_768x576"]
+             "tracker_frame_8cam_16people_masks", "pf_frame_5cam_4targets", "detect_frame_768x576"]
     out.mkdir(parents=True, exist_ok=True)
     r = subprocess.run([str(BUILD / "bin" / "mvtrack-bench")] + names, capture_output=True, text=True)
     (out / "log.txt").write_text(r.stdout + r.stderr)

@@ -261,7 +261,7 @@ def main(argv=None) -> int:
     ap.add_argument("--at", type=float, default=6.0, help="stop the daemon this far into the scene, s (default 6)")
     ap.add_argument("--down", type=float, default=1.0, help="restart it this long after, s (default 1)")
     ap.add_argument("--mode", default="pkf", help="daemon --mode, and more daemon options after it if wanted "
-                    "(default pkf; e.g. 'pkf --lifecycle body')")
+                    "(default pkf; e.g. 'pkf --outlier-persist 1')")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--port", type=int, default=7300 + os.getpid() % 200, help="private multicast port")
     ap.add_argument("--out", type=Path, default=REPO / "out" / "restart")

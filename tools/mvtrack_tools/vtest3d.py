@@ -12,7 +12,7 @@ annotation's gt.txt of PETS09-S2L1; by default the project's reference data besi
    a track on them is neither false nor required). Frames 0-399 are where the model was looked
    at; 400-794 are reported apart.
 
-    tools/mvtrack vtest3d [--daemon-args "--lifecycle rules"] [--out out/vtest3d] [--json]
+    tools/mvtrack vtest3d [--daemon-args "--mode kf"] [--out out/vtest3d] [--json]
 """
 from __future__ import annotations
 
