@@ -137,10 +137,14 @@ mvt_err_t mvt_pkf_update(mvt_cv_state_t *s, const mvt_pkf_innov_t *in)
 mvt_err_t mvt_pkf_paper_distance(const mvt_cv_state_t *s, const mvt_camera_t *cam, const mvt_real var_m2[3],
                                  mvt_real gamma, const mvt_pkf_meas_t *meas, mvt_real *dist)
 {
-    /* Computed in normalised camera coordinates with M = [R | t] instead of P = K [R | t]: K is an
-     * affine map of the image plane, so the normalised conic distance is the same, and the
-     * numbers stay near 1 (a conic in pixels loses float precision). Translating the ellipsoid's
-     * centre c to the origin first keeps the dual quadric diagonal. */
+    /* Computed in normalised camera coordinates (K is an affine map of the image plane, so the
+     * normalised conic distance is the same). The outline is the cone of rays from the camera
+     * centre tangent to the ellipsoid: with u the ellipsoid's centre in the camera frame and
+     * Ei = R diag(1 / (gamma var)) R^T its shape's inverse there, a ray w meets the ellipsoid iff
+     * (w^T Ei u)^2 >= (w^T Ei w)(u^T Ei u - 1), so the outline's point conic is
+     * C = (u^T Ei u - 1) Ei - (Ei u)(Ei u)^T (negative inside). This is the inverse of the dual
+     * quadric's projection up to scale, without inverting that nearly rank-one matrix: a head-sized
+     * ellipsoid a few metres away would lose it to float rounding. */
     const mvt_real *R = cam->R;
     const mvt_real *c = s->x;
     mvt_real tc[3]; /* camera-frame position of c */
@@ -148,19 +152,37 @@ mvt_err_t mvt_pkf_paper_distance(const mvt_cv_state_t *s, const mvt_camera_t *ca
     if (!(tc[2] > MVT_R(1e-3))) {
         return MVT_ERR_BEHIND;
     }
-    /* C* = M' D M'^T with M' = [R | tc] and D = diag(gamma var, -1): R D3 R^T - tc tc^T */
-    mvt_real cs[9], cc[9];
+    mvt_real inv_e[3];
+    for (int k = 0; k < 3; k++) {
+        const mvt_real e = gamma * var_m2[k];
+        if (!(e > MVT_R(0.0))) {
+            return MVT_ERR_NUMERIC;
+        }
+        inv_e[k] = MVT_R(1.0) / e;
+    }
+    mvt_real ei[9];
     for (int a = 0; a < 3; a++) {
         for (int b = 0; b < 3; b++) {
-            mvt_real acc = -tc[a] * tc[b];
+            mvt_real acc = MVT_R(0.0);
             for (int k = 0; k < 3; k++) {
-                acc += R[a * 3 + k] * gamma * var_m2[k] * R[b * 3 + k];
+                acc += R[a * 3 + k] * inv_e[k] * R[b * 3 + k];
             }
-            cs[a * 3 + b] = acc;
+            ei[a * 3 + b] = acc;
         }
     }
-    if (mvt_la_inv3(cs, cc) != MVT_OK) {
-        return MVT_ERR_NUMERIC;
+    mvt_real v[3];
+    for (int a = 0; a < 3; a++) {
+        v[a] = ei[a * 3] * tc[0] + ei[a * 3 + 1] * tc[1] + ei[a * 3 + 2] * tc[2];
+    }
+    const mvt_real sq = tc[0] * v[0] + tc[1] * v[1] + tc[2] * v[2] - MVT_R(1.0);
+    if (!(sq > MVT_R(0.0))) {
+        return MVT_ERR_NUMERIC; /* the camera is inside the ellipsoid */
+    }
+    mvt_real cc[9];
+    for (int a = 0; a < 3; a++) {
+        for (int b = 0; b < 3; b++) {
+            cc[a * 3 + b] = sq * ei[a * 3 + b] - v[a] * v[b];
+        }
     }
     /* conic: x^T A x + 2 b^T x + c0 = 0 -> (x - x0)^T A (x - x0) = k, x0 = -A^-1 b */
     const mvt_real a[3] = {cc[0], MVT_R(0.5) * (cc[1] + cc[3]), cc[4]};

@@ -754,6 +754,9 @@ static void test_mvt_pkf_paper_distance_matches_projected_ellipsoid(void **state
     std::mt19937 g(3);
     std::uniform_real_distribution<double> U(-1, 1);
     const auto ps = random_params(g, 4, false);
+    /* a wide ellipsoid, and the default's head-sized one (gamma (4 cm)^2: semi-axes 10 cm) */
+    static const mvt_real vars[2][3] = {{0.01f, 0.02f, 0.005f}, {0.0016f, 0.0016f, 0.0016f}};
+    for (int vi = 0; vi < 2; vi++)
     for (const auto &p : ps) {
         mvt_camera_t cam;
         assert_int_equal(mvt_cam_init(&cam, &p), MVT_OK);
@@ -761,7 +764,7 @@ static void test_mvt_pkf_paper_distance_matches_projected_ellipsoid(void **state
         mvt_cv_state_t c;
         const mvt_real p0[3] = {2.8f, 2.4f, 1.5f}, cov[9] = {1e-2f, 0, 0, 0, 1e-2f, 0, 0, 0, 1e-2f};
         mvt_cv_init(&c, p0, cov, 0.3f, 0);
-        const mvt_real var[3] = {0.01f, 0.02f, 0.005f};
+        const mvt_real *var = vars[vi];
         const double gamma = 6.0;
         /* Eigen: outline conic of the ellipsoid's dual quadric */
         Eigen::Matrix4d Qd = Eigen::Matrix4d::Zero();

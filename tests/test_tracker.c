@@ -302,6 +302,51 @@ static void test_mvt_tracker_step_straight_walk_kf_tracked(void **state)
     run_straight_walk(MVT_FILTER_TRIANGULATE, MVT_PKF_JACOBIAN, 0.03);
 }
 
+/* The paper's gate (--gate paper) decides which detections may be a track's head: with its default
+ * ellipsoid (semi-axes sqrt(6) x 4 cm) a walker is tracked from the heads of 90 % of the views or
+ * more, in float too; shrunk to a tenth of a millimetre it admits none, and the heads stop updating
+ * it. */
+static uint64_t g_views_seen; /* paper_gate_updates: the views that showed the person */
+
+static uint64_t paper_gate_updates(mvt_real var_m2, mvt_gate_t gate)
+{
+    g_views_seen = 0;
+    mvt_camera_t cams[5];
+    init_tracker(cams, MVT_FILTER_PROJECTIVE, MVT_PKF_JACOBIAN);
+    g_tracker.cfg.gate = gate;
+    for (int i = 0; i < 3; i++) g_tracker.cfg.paper.var_m2[i] = var_m2;
+    test_rng_t rng = {5};
+    double err = 0;
+    for (int t = 0; t < 100; t++) {
+        const double ts = t * 0.04;
+        const mvt_real x[3] = {(mvt_real)(1.0 + 0.35 * ts), (mvt_real)(1.0 + 0.2 * ts), 1.7f};
+        frame_of(cams, 5, x, 1000000 + t * 40000, &rng, 2.0);
+        for (int k = 0; k < 5; k++) g_views_seen += (g_seen >> k) & 1u;
+        assert_int_equal(mvt_tracker_step(&g_tracker, &g_frame, &g_out), MVT_OK);
+        if (t == 99 && g_out.num_tracks > 0) {
+            for (int i = 0; i < 3; i++) err += (double)((g_out.tracks[0].pos_m[i] - x[i]) * (g_out.tracks[0].pos_m[i] - x[i]));
+        }
+    }
+    if (var_m2 > 1e-4f) {
+        assert_int_equal(g_out.num_tracks, 1);
+        assert_true(sqrt(err) < 0.05);
+    }
+    return g_tracker.counters.updates;
+}
+
+static void test_mvt_tracker_paper_gate_decides_heads(void **state)
+{
+    (void)state;
+    const uint64_t chi2 = paper_gate_updates(0.04f * 0.04f, MVT_GATE_CHI2);
+    const uint64_t wide = paper_gate_updates(0.04f * 0.04f, MVT_GATE_PAPER), seen = g_views_seen;
+    const uint64_t tight = paper_gate_updates(1e-8f, MVT_GATE_PAPER);
+    print_message("paper gate: %llu head updates of %llu views with the default ellipsoid (chi-square gate: %llu), "
+                  "%llu with a 0.1 mm one\n", (unsigned long long)wide, (unsigned long long)seen,
+                  (unsigned long long)chi2, (unsigned long long)tight);
+    assert_true(wide > 9 * seen / 10);
+    assert_true(tight < wide / 10);
+}
+
 /* Every camera reports at t and none sees anything. */
 static void blank_frame(int64_t t)
 {
@@ -520,6 +565,7 @@ int main(void)
         cmocka_unit_test(test_mvt_pkf_innovation_behind_camera_refused),
         cmocka_unit_test(test_mvt_tracker_step_straight_walk_pkf_tracked),
         cmocka_unit_test(test_mvt_tracker_step_straight_walk_kf_tracked),
+        cmocka_unit_test(test_mvt_tracker_paper_gate_decides_heads),
         cmocka_unit_test(test_mvt_tracker_step_unseen_track_coasts_then_dies),
         cmocka_unit_test(test_mvt_tracker_resume_continues_and_refuses_bad_state),
         cmocka_unit_test(test_mvt_tracker_step_hostile_detections_counted_not_fatal),
