@@ -31,7 +31,7 @@ static void usage(FILE *f)
             "  --state FILE        save the tracker to FILE every 0.2 s (1 s in pf modes) and at exit\n"
             "                      (atomically: FILE.tmp, fsync, rename) and restore it at start when\n"
             "                      it matches this build, rig and mode and the first camera message is\n"
-            "                      at most 2 s (coast_max_s) after it: people keep their identities\n"
+            "                      at most 2 s after it: people keep their identities\n"
             "                      across a restart. Identities are leased in FILE.ids and never\n"
             "                      reused; anything unusable is refused with one line, clean start\n"
             "  --deadline-ms X     live mode: process an incomplete frame set this long after its\n"

@@ -1,5 +1,5 @@
 /*
- * mvt_body.h - one model of a person (MVT_LIFECYCLE_BODY): the steps of a frame, one file each
+ * mvt_body.h - one model of a person: the steps of a frame, one file each
  * (internal to the core; docs/tracking.md gives the reasoning).
  *
  * A person is a head top at (x, y, z) over a body that stands on the floor, 2 body.halfwidth_m wide.

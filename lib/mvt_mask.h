@@ -38,7 +38,7 @@ mvt_err_t mvt_mask_from_runs(mvt_mask_t *mask, int image_width, int image_height
 /* 1 when a foreground pixel lies within r raw image pixels of the image point uv along each axis
  * (the square [u - r, u + r] x [v - r, v + r], at mask resolution the mask pixels it touches), 0
  * when none does, when the square misses the mask, or when the mask is empty (0 x 0) or uv or r is
- * not finite. The PKF's evidence that a person's place is empty in a view (mvt_trk_occl.c).
+ * not finite. The PKF's evidence that a person's place is empty in a view (mvt_body_vis.c).
  * O(r^2 / scale^2), stopping at the first foreground pixel. */
 int mvt_mask_fg_near(const mvt_mask_t *mask, const mvt_real uv[2], mvt_real r);
 
@@ -56,7 +56,7 @@ int mvt_mask_fg_near(const mvt_mask_t *mask, const mvt_real uv[2], mvt_real r);
  * is on the mask's first row or its run reaches the first or last column (a silhouette cut by the
  * picture's edge, whose outline may rise beyond it), when the mask is empty or an argument is not
  * finite or negative. The PKF's measurement of a head that a merged blob's reported top does not
- * show (mvt_trk_occl.c).
+ * show (mvt_body_explain.c).
  * O((half_w / scale + 1) * (v_hi - v_lo + clear_px) / scale + max_width_px / scale), no memory. */
 int mvt_mask_top_in_band(const mvt_mask_t *mask, mvt_real u, mvt_real half_w, mvt_real v_lo, mvt_real v_hi,
                          mvt_real max_width_px, mvt_real clear_px, mvt_real top_uv[2]);

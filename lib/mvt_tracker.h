@@ -89,21 +89,9 @@ typedef struct mvt_body_prior {
 /* The people as the model counts them: how often a camera reports one, how many false blobs it
  * sends, how often people come and go, and how sure a track must be to be shown or ended. */
 typedef struct mvt_population {
-    mvt_real p_detect;          /* the prior of each camera's detection
-                                   probability, which it learns online (MVT_BODY_PD_S). Rules:
-                                   probability that a camera whose picture holds a person's head
-                                   (not hidden) reports it: a detection within the birth radius,
-                                   inside a blob's box; (0, 1), default 0.9. It weighs births and
-                                   tracks (mvt_trk_evidence_weights): of a candidate, the two views
-                                   that form it prove nothing (any two rays that meet make one);
-                                   every further view that detects it multiplies its odds by
-                                   (p_detect + (1 - p_detect) q) / q, q that view's chance of a
-                                   clutter detection there; every view with boxes that shows its
-                                   place in no blob by 1 - p_detect; it is born when the product is
-                                   >= 1. A tentative or confirmed track is refuted in a frame the
-                                   same way. Association weighs it too: a track's miss costs
-                                   2 ln(p_detect / (1 - p_detect)) - 2 ln(2 pi lambda) against a
-                                   detection's d^2 + ln |S| (mvt_trk_assoc.c) */
+    mvt_real p_detect;          /* the prior of each camera's probability of reporting a
+                                   visible head, which it learns online (MVT_BODY_PD_S); (0, 1),
+                                   default 0.9 */
     mvt_real clutter_per_frame; /* a camera's false blobs per frame before it
                                    has been watched (then learnt online over MVT_BODY_CLUTTER_S),
                                    0.01..100; default 0.5 */
@@ -423,9 +411,9 @@ void mvt_tracker_save(const mvt_tracker_t *self, mvt_tracker_persist_t *out);
  * next_id, statuses known, states finite with a positive-definite covariance, every time at or
  * before the saved clock. MVT_ERR_INVALID leaves the tracker unchanged.
  * unobserved_us >= 0 is time during which nobody watched (the process was down): the tracks'
- * "last seen" clocks move forward by it, so an outage is not taken as
- * evidence that people left; the filters still predict across the whole time (their covariance
- * grows with it). O(MVT_MAX_TARGETS). */
+ * "last seen" clocks move forward by it, so an outage does not use up a sleeping label's wait;
+ * the filters still predict across the whole time (their covariance grows with it).
+ * O(MVT_MAX_TARGETS). */
 mvt_err_t mvt_tracker_resume(mvt_tracker_t *self, const mvt_tracker_persist_t *p, int64_t unobserved_us);
 
 /* Identities given from now on are >= first (> 0): a caller that cannot restore a state but knows

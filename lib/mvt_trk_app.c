@@ -4,9 +4,7 @@
  * Where the detector sends each blob's mean hue and saturation (detection_t), geometry is
  * not the only thing that tells two people apart. Two people passing at half a metre have gates
  * that hold both heads in most views, and an identity is lost the moment the assignment
- * prefers the wrong one by a few pixels; their shirts rarely agree. And a person born again after
- * their track was lost (mvt_trk_recover.c) should take back their own identity, not a
- * neighbour's who happens to be as near.
+ * prefers the wrong one by a few pixels; their shirts rarely agree.
  *
  * The model is one chroma point per person, a = s (cos 2 pi h, sin 2 pi h): grey clothes lie
  * near the centre of the disc, where a hue is noise, and saturated ones on its rim. A person's
@@ -17,9 +15,10 @@
  * weighted by the chance that it shows the person (the mixture's posterior), so such detections
  * neither pull the mean nor widen the spread, and their cost is bounded (-2 ln eps).
  *
- * Used in association (mvt_trk_assoc.c: -2 ln LR is added to the chi-square distance, so the
- * assignment maximises the joint likelihood), in the merged-blob ambiguity test, and in identity
- * recovery (a birth's detections against the record's colour).
+ * The tracker learns it from the blobs that are a track's head alone in their blob
+ * (mvt_body_update.c) and reports it (track_t.hue, saturation); association does not weigh it
+ * (measured: with clothes the background's colour it pulled tracks onto the wrong blobs;
+ * docs/results.md, "Colour"). The cost below is what weighing it would use.
  */
 #include <math.h>
 #include <string.h>

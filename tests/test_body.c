@@ -1,4 +1,4 @@
-/* Black-box scenes for MVT_LIFECYCLE_BODY (one model of a person): rates over seeds, no internal
+/* Black-box scenes for the tracker's model of a person: rates over seeds, no internal
  * fields read. The blobs are drawn here from a body (a 0.4 m wide column under the head) projected
  * through the room's cameras, lens included. */
 #include <setjmp.h>

@@ -228,11 +228,9 @@ static int coaster_takes(uint32_t seed, int *b_kept)
     return taken;
 }
 
-/* Association by likelihood (mvt_trk_assoc.c, miss_base): a coasting track's wide prediction
- * spreads its likelihood thin, so the track that predicted B's detections keeps them. With the sum
- * of squared Mahalanobis distances alone the coaster took 7 frames' detections over the 8 seeds
- * (in 7 of them: it is nearer in its own wide metric); by likelihood 1 (seed 7, frame 83: one
- * camera's detection of B outside B's own gate, which only the coaster's can hold). */
+/* Association by likelihood (mvt_body_explain.c): a coasting track's wide prediction spreads its
+ * likelihood thin, so the track that predicted B's detections keeps them; over 8 seeds the coaster
+ * may take at most one frame's. */
 static void test_mvt_tracker_step_coasting_track_does_not_take_passer_by(void **state)
 {
     (void)state;
@@ -252,8 +250,8 @@ static void test_mvt_tracker_step_coasting_track_does_not_take_passer_by(void **
 /* Two people walk toward each other (a short one and a tall one), stop, and nobody sees them for
  * 1 s (cameras report nothing): each track's constant-velocity prediction lands on the other
  * person. When they are seen again, the ceiling camera, which cannot tell heights, reports first.
- * The joint re-acquisition (mvt_trk_reacquire) gives each track its own person by height, which
- * it does not let the prediction over the gap blur. */
+ * After the gap the persons found again are paired with the labels all at once, by position and
+ * height (mvt_body_birth.c), so each track gets its own person. */
 static void test_mvt_tracker_step_lost_tracks_reacquired_by_height(void **state)
 {
     (void)state;
@@ -291,7 +289,7 @@ static void test_mvt_tracker_step_lost_tracks_reacquired_by_height(void **state)
 /* Two people walk up to each other and stand talking, heads 0.29 m apart, for 6 s, seen by a
  * detector that reports both heads (merged_blobs 0), or by a top-of-blob detector that merges them
  * into one blob in every view, its top the taller head (merged_blobs 1): both tracks live on under
- * their identities, neither deleted as the other's duplicate (dup_dist_m 0.25 m), each within 0.2 m
+ * their identities, neither deleted as the other's duplicate, each within 0.2 m
  * of its person. With merged blobs the shorter person is hidden in every view: the track lives on
  * the blobs' boxes (occlusion) and the height two views last measured (hold_height); its height
  * used to sink to the floor in 3 s. Five noise seeds (29 of 30 pass in a longer scratch loop). */
@@ -752,9 +750,8 @@ static void test_mvt_tracker_step_queue_hidden_kept_while_box_needs_them(void **
     assert_true(gone_after >= 0 && gone_after <= 25);
 }
 
-/* A person vanishes in the middle of the room while two others stay in view: with boxes, the
- * views that show the place empty delete the track within contra_max_s; without boxes it coasts
- * for coast_max_s. */
+/* A person vanishes in the middle of the room while two others stay in view: five views that each
+ * miss the head end the track within a few frames, with boxes or without. */
 static void test_mvt_tracker_step_vanished_person_contradicted_deleted(void **state)
 {
     (void)state;
@@ -951,7 +948,7 @@ static void test_mvt_tracker_step_ghost_in_boxes_refuted_by_masks(void **state)
  * remaining people's) are widened over the place where they stood: the track is hidden in those
  * boxes, and the boxes' extent even needs it, so it lives on. Where the cameras send their masks,
  * which hold the two people's silhouettes only, the place is background in every view: the track
- * is hidden nowhere, contradicted and deleted (contra_max_s, 0.5 s). */
+ * is hidden nowhere and ends within 15 frames. */
 static void test_mvt_tracker_step_vanished_in_widened_boxes_deleted_by_masks(void **state)
 {
     (void)state;
@@ -1073,14 +1070,13 @@ static int two_camera_frame(double y, int64_t utime, test_rng_t *rng, int zenith
 }
 
 /* Where one camera reaches. A person born where both cameras see them (the room's middle) walks at
- * 0.76 m/s to y = 4.4 m, where the zenith camera's field has ended (at 4.0 m), stands there 4 s (twice
- * coast_max_s) and walks back. Every camera whose picture holds the head reports it, so one view
+ * 0.76 m/s to y = 4.4 m, where the zenith camera's field has ended (at 4.0 m), stands there 4 s and
+ * walks back. Every camera whose picture holds the head reports it, so one view
  * there sees the track all the same: one identity throughout, within 0.25 m (the height held to
  * what two views measured fixes the point on the corner camera's ray). The guard: where the
- * zenith camera's picture holds the head and it reports nothing for 3 s, the rules take the corner
- * camera's detections alone as too little to keep the track (deleted at coast_max_s, as ever); the
- * body model keeps it: each frame's blob at the predicted head outweighs one view's miss (a
- * detector that loses a person the other view sees). */
+ * zenith camera's picture holds the head and it reports nothing for 3 s, the track is kept: each
+ * frame's blob at the predicted head outweighs one view's miss (a detector that loses a person the
+ * other view sees). */
 static void test_mvt_tracker_step_person_where_one_camera_reaches_kept(void **state)
 {
     (void)state;

@@ -261,14 +261,10 @@ def test_daemon_false_alarm_flood_counted_tracks_kept(tmp_path, daemon_path, see
     res = score(log, out, rig.frame_rate)
     # the two people keep their identities through the flood
     assert res["id_switches"] == 0 and res["misses"] <= 10, res
-    # a tentative track is confirmed only when its detections are 99 times likelier from a person
-    # than from the view's clutter (mvt_trk_delete, the existence test), the prior odds of a new
-    # track fall with the number of tracks tried at once (mvt_trk_init, birth_prior), and the
-    # clutter density counts the detections the daemon dropped over capacity (mvt_view_t
-    # num_offered: the kept ones are each track's nearest, so the density of what was kept made a
-    # ghost's random detections look 4.7 times likelier than clutter). Seed 3's random agreements
-    # confirmed 56 ghost tracks with none of the three, 4 with the test alone; seeds 6, 8 and 9
-    # confirmed 2 each before the third (docs/tracking.md, Lifecycle; tools/mvtrack flood)
+    # a track is confirmed only when its existence, against the view's clutter density, passes 0.9;
+    # that density counts the detections the daemon dropped over capacity (mvt_view_t num_offered:
+    # the kept ones are each track's nearest, so the density of what was kept would make a ghost's
+    # random detections look likelier than clutter; tools/mvtrack flood)
     assert res["ghosts"] == 0 and res["false_positive_frames"] == 0, res
     assert res["max_tracks"] <= 32
     assert res["rejected_over_capacity"] >= 100 * 5 * (302 - 64) * 0.99
