@@ -369,8 +369,9 @@ void mvt_tracker_config_default(mvt_tracker_config_t *cfg);
 mvt_err_t mvt_tracker_init(mvt_tracker_t *self, const mvt_tracker_config_t *cfg, const mvt_camera_t *cams,
                            int num_cameras);
 
-/* Processes one frame set and fills out (may be NULL). Worst case O(C * T * D) for association
- * plus O(C^2 * D^2 * C * D) for births with C cameras, T tracks, D detections per camera.
+/* Processes one frame set and fills out (may be NULL). Worst case O(C * T^2 * (T + D)) for the
+ * explanation (one assignment per camera) plus O(C^2 * D^2) for births (each free blob's candidate
+ * gathers every other view's blobs), with C cameras, T tracks, D detections per camera.
  * MVT_ERR_INVALID (counted, state unchanged) when frame->utime_us is earlier than the last frame. */
 mvt_err_t mvt_tracker_step(mvt_tracker_t *self, const mvt_frame_t *frame, mvt_output_t *out);
 
