@@ -15,6 +15,12 @@ constexpr int kMinFragmentPx = 4;    /* working pixels: smaller components are n
 constexpr double kHeadRadiusM = 0.10;
 constexpr float kHeadMinM = 1.3f;    /* a fragment reaching this high at its own place has a head */
 constexpr double kShoulderDropM = 0.35; /* a standing person's shoulders below the head top */
+constexpr float kTwoHighM = 2.4f;    /* a top above this height over a body's feet (at its far rim)
+                                      * is a second person's: the tallest standing head (2.0 m) and
+                                      * a head and neck (0.4 m) more, so that a tall person, a
+                                      * raised hand or feet a shadow lowers stay under it */
+constexpr float kFeetBandM = 0.2f;  /* the feet and ankles above the floor */
+constexpr float kStackedRowsFilled = 0.9f; /* rows of a standing body's column that are foreground */
 constexpr double kTwoWideM = 0.7;    /* wider than anyone's shoulders (about 0.45 m, the mask's
                                       * closing and blur added) */
 
@@ -202,6 +208,8 @@ Detector::Column Detector::column_at(const double g[3]) const
      * differ by r (f / D - |d(image) / d(height)|), zero for a level view, r f / D from above */
     c.head_offset_px = (float)(kHeadRadiusM * (fw / d_head - (double)un / 0.1));
     c.px_per_m = (float)(fw / d_mid);
+    c.g[0] = g[0];
+    c.g[1] = g[1];
     const float width_px = (float)(2.0 * cfg_.body_half_width_m * fw / d_mid);
     const float cap_px = (float)(cfg_.body_half_width_m * fw / d_head);
     c.expected_area = std::max(width_px * c.height_px, 0.5f * (float)M_PI * cap_px * cap_px);
@@ -478,6 +486,99 @@ void Detector::process(const cv::Mat &bgr, Result &out)
     fill_masks(out);
 }
 
+bool Detector::stacked_head(const std::vector<cv::Point> &seg, const Column &c, Result &out)
+{
+    /* the top's height over the feet in this column, in pixels along up (height_at stops at the
+     * column's top) */
+    const float a_foot = dot2(c.up, c.axis[0][0], c.axis[0][1]);
+    const float vpm = c.height_px / (float)cfg_.person_height_m;
+    float a_top = -1e30f;
+    for (const cv::Point &p : seg) {
+        a_top = std::max(a_top, dot2(c.up, (float)p.x, (float)p.y));
+    }
+    /* the bar is the body's far rim at that height, not its axis: a camera looking down steeply
+     * sees the far side of one body's shoulders and head well above its axis */
+    const double away[2] = {c.g[0] - (double)cam_.centre[0], c.g[1] - (double)cam_.centre[1]};
+    const double n_away = std::sqrt(away[0] * away[0] + away[1] * away[1]);
+    const double s_rim = n_away > 1e-6 ? cfg_.body_half_width_m / n_away : 0.0;
+    const double rim[3] = {c.g[0] + s_rim * away[0], c.g[1] + s_rim * away[1], (double)kTwoHighM};
+    float p_rim[2];
+    if (!project_work(rim, p_rim) || a_top <= std::max(dot2(c.up, p_rim[0], p_rim[1]), a_foot + kTwoHighM * vpm)) {
+        return false;
+    }
+    /* the axis point at a standing person's head top */
+    const float zh = (float)cfg_.person_height_m;
+    float hx = 0.f, hy = 0.f;
+    bool found = false;
+    for (int k = 0; k + 1 < c.n && !found; k++) {
+        if (c.z[k] <= zh && zh <= c.z[k + 1]) {
+            const float t = (zh - c.z[k]) / std::max(1e-6f, c.z[k + 1] - c.z[k]);
+            hx = c.axis[k][0] + t * (c.axis[k + 1][0] - c.axis[k][0]);
+            hy = c.axis[k][1] + t * (c.axis[k + 1][1] - c.axis[k][1]);
+            found = true;
+        }
+    }
+    if (!found) {
+        return false;
+    }
+    /* a body stands in the column from the floor to head height: its rows (along up) are
+     * foreground from the feet to the head, without the gap that a speck or a shadow on the floor
+     * below a single person leaves */
+    const float a_head = dot2(c.up, hx, hy);
+    const int n_rows = std::max(1, (int)std::ceil(a_head - a_foot));
+    rows_.assign((size_t)n_rows, 0);
+    near_.clear();
+    for (const cv::Point &p : seg) {
+        const float a = dot2(c.up, (float)p.x, (float)p.y);
+        if (a <= a_head && in_column(c, (float)p.x, (float)p.y)) {
+            near_.push_back(p);
+            rows_[(size_t)std::min(n_rows - 1, std::max(0, (int)(a - a_foot)))] = 1;
+        }
+    }
+    int filled = 0;
+    for (uint8_t r : rows_) {
+        filled += r;
+    }
+    if (filled < (int)(kStackedRowsFilled * (float)n_rows)) {
+        return false;
+    }
+    /* a walker's feet straddle the vertical under the head: centre the head between them (the
+     * column stands on the lowest pixels, often the front foot alone) */
+    const float perp[2] = {-c.up[1], c.up[0]};
+    double s_feet = 0.0;
+    int n_feet = 0;
+    for (const cv::Point &p : near_) {
+        if (dot2(c.up, (float)p.x, (float)p.y) - a_foot < kFeetBandM * vpm) {
+            s_feet += (double)dot2(perp, (float)p.x, (float)p.y);
+            n_feet++;
+        }
+    }
+    if (n_feet > 0) {
+        const float off = (float)(s_feet / n_feet) - dot2(perp, c.axis[0][0], c.axis[0][1]);
+        hx += off * perp[0];
+        hy += off * perp[1];
+    }
+    /* the nearer body's box and torso colour from its part of the blob; its head where it stands */
+    int x0 = 1 << 30, y0 = 1 << 30, x1 = -1, y1 = -1;
+    for (const cv::Point &p : near_) {
+        x0 = std::min(x0, p.x);
+        y0 = std::min(y0, p.y);
+        x1 = std::max(x1, p.x);
+        y1 = std::max(y1, p.y);
+    }
+    const cv::Rect roi(x0, y0, x1 - x0 + 1, y1 - y0 + 1);
+    cv::cvtColor(small_(roi), hsv_, cv::COLOR_BGR2HSV_FULL);
+    Blob b;
+    bool at_border = false;
+    measure(near_, c, hsv_, roi, b, &at_border);
+    const float s = (float)cfg_.work_scale;
+    b.u = (hx + 0.5f) * s - 0.5f;
+    b.v = (hy + 0.5f) * s - 0.5f;
+    b.bbox[1] = std::min(b.bbox[1], b.v);
+    out.blobs.push_back(b);
+    return true;
+}
+
 void Detector::find_blobs(Result &out, bool selective)
 {
     const int n = cv::connectedComponentsWithStats(fg_, labels_, stats_, centroids_, 8, CV_32S);
@@ -728,6 +829,12 @@ void Detector::find_blobs(Result &out, bool selective)
             }
             out.blobs.push_back(b);
             if (si > 0) {
+                out.splits++;
+            }
+            /* a top far higher above this body's feet than anyone stands is a farther person's
+             * head over a nearer one: the nearer one's head lies inside the blob, at a standing
+             * person's height over the feet */
+            if (c.valid && stacked_head(seg, c, out)) {
                 out.splits++;
             }
         }

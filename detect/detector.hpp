@@ -15,7 +15,10 @@
  *    pixel per slice across the local vertical) has two peaks a body apart with a dip between them
  *    (two heads side by side; the dip is the shoulders), or, with no such dip, where it is wider
  *    within a shoulder's drop of its top than anyone's shoulders (two heads touching): at the
- *    profile's lowest point away from that band's ends.
+ *    profile's lowest point away from that band's ends. A blob whose top stands higher over its
+ *    feet than anyone stands (`kTwoHighM`) while a body fills its column from the feet to head
+ *    height holds a nearer person in front of a farther one: a second blob is sent for the nearer
+ *    one, its head at a standing person's height over the feet.
  *  - background, not a blob: where the outline of a blob is no more an edge of the frame than of
  *    the background image (`min_outline_contrast`), what changed is the light on a still surface
  *    (a wall, a windscreen, a car roof) or a ghost of what the background learnt (a person present
@@ -133,8 +136,10 @@ class Detector {
         float px_per_m = 0;          /* image length of a horizontal metre at mid-body */
         float head_offset_px = 0;    /* head sphere's rim beyond the head top, along up */
         float expected_area = 0;     /* expected silhouette area */
+        double g[2] = {0, 0};        /* the ground point it stands on, metres */
     };
 
+    bool stacked_head(const std::vector<cv::Point> &seg, const Column &c, Result &out);
     bool ground_point(float xw, float yw, double g[3]) const;
     bool project_work(const double x[3], float p[2]) const;
     void local_up(float xw, float yw, float up[2]) const;
@@ -152,6 +157,8 @@ class Detector {
     Config cfg_;
     cv::Ptr<cv::BackgroundSubtractor> bg_;
     cv::Mat small_, resized_, gained_, colour_, fg_raw_, fg_, tmp_, labels_, stats_, centroids_, hsv_;
+    std::vector<cv::Point> near_;    /* the nearer body's pixels of a blob that holds two (stacked_head) */
+    std::vector<uint8_t> rows_;      /* rows of the nearer body's column that are foreground */
     cv::Mat open_kernel_, close_kernel_, mask_tmp_, mask_bgr_, mask_hsv_;
     int wsmall_ = 0, hsmall_ = 0;
     int64_t frames_ = 0;

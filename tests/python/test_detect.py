@@ -135,8 +135,8 @@ def test_vtest_real_footage_finds_labelled_heads():
 @pytest.mark.accuracy
 def test_vtest_whole_sequence_against_the_public_ground_truth():
     """vtest.avi, frames 20-794 against the PETS 2009 S2.L1 annotation (where the project's
-    reference data is present): recall >= 0.88 within 15 px and <= 0.35 false blobs a frame; the
-    frames the detector was developed on and the held-out ones each >= 0.86 and <= 0.4."""
+    reference data is present): recall >= 0.90 within 15 px and <= 0.38 false blobs a frame; the
+    frames the detector was developed on and the held-out ones each >= 0.88 and <= 0.4."""
     from mvtrack_tools import vtest_eval
 
     if not vtest_eval.GT_JSON.exists():
@@ -147,9 +147,9 @@ def test_vtest_whole_sequence_against_the_public_ground_truth():
     r = json.loads(out.stdout.strip().splitlines()[-1])["detectors"]["mvtrack-detect"]
     assert r["20-794"]["people"] > 4000, r
     for part in ("20-399", "400-794"):
-        assert r[part]["recall"] >= 0.86, (part, r[part])
+        assert r[part]["recall"] >= 0.88, (part, r[part])
         assert r[part]["false_blobs_per_frame"] <= 0.4, (part, r[part])
-    assert r["20-794"]["recall"] >= 0.88 and r["20-794"]["false_blobs_per_frame"] <= 0.35, r["20-794"]
+    assert r["20-794"]["recall"] >= 0.90 and r["20-794"]["false_blobs_per_frame"] <= 0.38, r["20-794"]
 
 
 def test_vtest_in_3d_with_one_camera(tmp_path):
@@ -207,6 +207,45 @@ def test_two_people_side_by_side_are_split(tmp_path):
         err = [min(np.hypot(*(pts - np.asarray(h)).T)) for h in t]
         ok += max(err) < 5.0
     assert ok >= 15, f"two heads found in {ok} of {len(msgs) - n0 - 2} frames"
+
+
+def vtest_like_rig(tmp_path: Path):
+    """vtest.avi's camera (7 m up, looking down across a square): people farther along its view
+    stand higher in the picture, so a nearer person's blob can reach a farther one's head."""
+    from mvtrack_tools.rig import Rig
+
+    rig = Rig.read(REPO / "tests" / "data" / "vtest_rig.yaml")
+    rig.write(tmp_path / "rig.yaml")
+    return rig
+
+
+def test_person_in_front_of_another_gives_both_heads(tmp_path):
+    """A person walking 3.5 m behind another along the camera's view, 0.25 m to the side: one
+    connected region whose top is the farther head, far higher above the nearer feet than anyone
+    stands. The detector reports both heads, each within 6 px, and a tall person (1.95 m) alone at
+    the nearer place stays one blob."""
+    rig = vtest_like_rig(tmp_path)
+    cam = rig.cameras[0]
+    near = np.array([-14.25, -10.0])
+    fwd = near - cam.centre[:2]
+    fwd /= np.linalg.norm(fwd)
+    far = near + 3.5 * fwd + 0.25 * np.array([-fwd[1], fwd[0]])
+    pair = [(far[0], far[1], 1.75, (200, 60, 40)), (near[0], near[1], 1.72, (40, 40, 200))]
+    path, tops, n0 = people_video(tmp_path, cam, pair, gaps=0)
+    msgs = detect_log(tmp_path, tmp_path / "rig.yaml", {cam.name: path})
+    both = 0
+    for m, t in zip(msgs[n0 + 2:], tops[n0 + 2:]):
+        pts = np.array([[d.u, d.v] for d in m.detections]).reshape(-1, 2)
+        err = [float(np.min(np.hypot(*(pts - np.asarray(h)).T))) if len(pts) else 1e9 for h in t]
+        both += max(err) < 6.0
+    assert both >= 15, f"both heads found in {both} of {len(msgs) - n0 - 2} frames"
+
+    alone = tmp_path / "alone"
+    alone.mkdir()
+    path, tops, n0 = people_video(alone, cam, [(near[0], near[1], 1.95, (40, 40, 200))], gaps=0)
+    msgs = detect_log(alone, tmp_path / "rig.yaml", {cam.name: path})
+    counts = [m.num_detections for m in msgs[n0 + 2:]]
+    assert counts and all(c == 1 for c in counts), counts
 
 
 @pytest.mark.parametrize("case", ["missing", "not_video", "empty", "unknown_camera", "wrong_size", "bad_video_arg",
