@@ -506,21 +506,13 @@ bool Detector::stacked_head(const std::vector<cv::Point> &seg, const Column &c, 
     if (!project_work(rim, p_rim) || a_top <= std::max(dot2(c.up, p_rim[0], p_rim[1]), a_foot + kTwoHighM * vpm)) {
         return false;
     }
-    /* the axis point at a standing person's head top */
-    const float zh = (float)cfg_.person_height_m;
-    float hx = 0.f, hy = 0.f;
-    bool found = false;
-    for (int k = 0; k + 1 < c.n && !found; k++) {
-        if (c.z[k] <= zh && zh <= c.z[k + 1]) {
-            const float t = (zh - c.z[k]) / std::max(1e-6f, c.z[k + 1] - c.z[k]);
-            hx = c.axis[k][0] + t * (c.axis[k + 1][0] - c.axis[k][0]);
-            hy = c.axis[k][1] + t * (c.axis[k + 1][1] - c.axis[k][1]);
-            found = true;
-        }
-    }
-    if (!found) {
+    /* a standing person's head top over the feet */
+    const double head[3] = {c.g[0], c.g[1], cfg_.person_height_m};
+    float h[2];
+    if (!project_work(head, h)) {
         return false;
     }
+    float hx = h[0], hy = h[1];
     /* a body stands in the column from the floor to head height: its rows (along up) are
      * foreground from the feet to the head, without the gap that a speck or a shadow on the floor
      * below a single person leaves */
@@ -559,14 +551,7 @@ bool Detector::stacked_head(const std::vector<cv::Point> &seg, const Column &c, 
         hy += off * perp[1];
     }
     /* the nearer body's box and torso colour from its part of the blob; its head where it stands */
-    int x0 = 1 << 30, y0 = 1 << 30, x1 = -1, y1 = -1;
-    for (const cv::Point &p : near_) {
-        x0 = std::min(x0, p.x);
-        y0 = std::min(y0, p.y);
-        x1 = std::max(x1, p.x);
-        y1 = std::max(y1, p.y);
-    }
-    const cv::Rect roi(x0, y0, x1 - x0 + 1, y1 - y0 + 1);
+    const cv::Rect roi = cv::boundingRect(near_);
     cv::cvtColor(small_(roi), hsv_, cv::COLOR_BGR2HSV_FULL);
     Blob b;
     bool at_border = false;
