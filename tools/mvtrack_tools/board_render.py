@@ -3,8 +3,8 @@
 A board (chessboard or ChArUco, from the same spec strings as calibrate.py) is a texture on a plane
 with pose (R_b, t_b): board point p (metres, z = 0 on the board) is world point R_b p + t_b. Every
 picture pixel is cast back through the camera (its lens included, cv2.undistortPoints) onto the
-board's plane and takes the texture there (bilinear), grey elsewhere; a slight optical blur and
-sensor noise follow. So the corners land where the camera model puts them, to a small fraction of a
+board's plane and takes the texture there (bilinear, 3 x 3 samples a pixel averaged), grey
+elsewhere; a slight optical blur and sensor noise follow. So the corners land where the camera model puts them, to a small fraction of a
 pixel, whatever the distortion.
 """
 from __future__ import annotations
@@ -39,34 +39,112 @@ def texture(board: Board) -> tuple[np.ndarray, float, float]:
     return img, -board.square, -board.square
 
 
+_RAYS: dict = {}
+
+
+def _rays(cam: Camera, ss: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The normalised image coordinates x and y of every sub-pixel of the picture, ss x ss per pixel,
+    and where no ray reaches (cached per lens: the inverse lens is the slow part)."""
+    key = (tuple(np.asarray(cam.K, float).ravel()), tuple(np.asarray(cam.dist, float).ravel()), cam.width, cam.height, ss)
+    if key not in _RAYS:
+        if len(_RAYS) > 4:
+            _RAYS.clear()
+        sub = (np.arange(ss) + 0.5) / ss - 0.5
+        u = (np.arange(cam.width)[:, None] + sub[None, :]).ravel()
+        v = (np.arange(cam.height)[:, None] + sub[None, :]).ravel()
+        uu, vv = np.meshgrid(u, v)
+        pix = np.stack([uu.ravel(), vv.ravel()], axis=1).reshape(-1, 1, 2)
+        xn = cv2.undistortPointsIter(pix, np.asarray(cam.K, float), np.asarray(cam.dist, float), None, None,
+                                     (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 40, 1e-10)).reshape(-1, 2)
+        xn = inverse_lens(cam, pix.reshape(-1, 2), xn)
+        # beyond the fold of the lens's polynomial a pixel has no ray: no light reaches it
+        fx, fy = _distort(_coeffs(cam), xn[:, 0], xn[:, 1])
+        K = np.asarray(cam.K, float)
+        dark = np.hypot(fx * K[0, 0] + K[0, 2] - pix[:, 0, 0], fy * K[1, 1] + K[1, 2] - pix[:, 0, 1]) > 1e-3
+        _RAYS[key] = (xn[:, 0].reshape(uu.shape).astype(np.float32), xn[:, 1].reshape(uu.shape).astype(np.float32),
+                      dark.reshape(uu.shape))
+    return _RAYS[key]
+
+
+def _distort(d: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """OpenCV's lens model: normalised (x, y) to distorted normalised coordinates."""
+    r2 = x * x + y * y
+    rad = (1 + r2 * (d[0] + r2 * (d[1] + r2 * d[4]))) / (1 + r2 * (d[5] + r2 * (d[6] + r2 * d[7])))
+    return (x * rad + 2 * d[2] * x * y + d[3] * (r2 + 2 * x * x),
+            y * rad + d[2] * (r2 + 2 * y * y) + 2 * d[3] * x * y)
+
+
+def _coeffs(cam: Camera) -> np.ndarray:
+    d = np.zeros(8)
+    dist = np.asarray(cam.dist, float).ravel()[:8]
+    d[:len(dist)] = dist
+    return d
+
+
+def inverse_lens(cam: Camera, pix: np.ndarray, xn: np.ndarray, iters: int = 12) -> np.ndarray:
+    """The normalised points the lens maps to pixels pix, polished by Newton's method from the
+    estimate xn. cv2.undistortPoints' fixed-point iteration stalls where the distorted radius grows
+    slowly with the true one (a strong barrel lens's picture corners) and leaves pixels off there;
+    Newton's steps converge wherever the map is still increasing."""
+    d = _coeffs(cam)
+    K = np.asarray(cam.K, float)
+    tx = (pix[:, 0] - K[0, 2]) / K[0, 0]
+    ty = (pix[:, 1] - K[1, 2]) / K[1, 1]
+    x, y = xn[:, 0].astype(np.float64).copy(), xn[:, 1].astype(np.float64).copy()
+    h = 1e-6
+    for _ in range(iters):
+        fx, fy = _distort(d, x, y)
+        ex, ey = fx - tx, fy - ty
+        ax, ay = _distort(d, x + h, y)
+        bx, by = _distort(d, x, y + h)
+        j11, j21 = (ax - fx) / h, (ay - fy) / h
+        j12, j22 = (bx - fx) / h, (by - fy) / h
+        det = j11 * j22 - j12 * j21
+        ok = np.abs(det) > 1e-9
+        det = np.where(ok, det, 1.0)
+        sx = np.where(ok, (j22 * ex - j12 * ey) / det, 0.0)
+        sy = np.where(ok, (j11 * ey - j21 * ex) / det, 0.0)
+        e0 = ex * ex + ey * ey
+        step = np.zeros_like(x)
+        for t in (1.0, 0.5, 0.25, 0.125):  # the longest step that lowers the error
+            gx, gy = _distort(d, x - t * sx, y - t * sy)
+            better = (step == 0) & ((gx - tx) ** 2 + (gy - ty) ** 2 < e0)
+            step[better] = t
+        x -= step * sx
+        y -= step * sy
+    return np.stack([x, y], axis=1)
+
+
 def render(cam: Camera, board: Board, R_b: np.ndarray, t_b: np.ndarray, rng: np.random.Generator | None = None,
-           noise: float = 1.5) -> np.ndarray:
-    """The camera's grey picture of the board at pose (R_b, t_b)."""
+           noise: float = 1.5, ss: int = 3) -> np.ndarray:
+    """The camera's grey picture of the board at pose (R_b, t_b): each pixel the mean of ss x ss
+    samples over its area (a sensor integrates light over its pixel; sampling only its centre
+    aliases the squares' edges by a good part of a pixel where the board is small or tilted)."""
     tex, x0, y0 = texture(board)
-    h, w = cam.height, cam.width
-    uu, vv = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
-    pix = np.stack([uu.ravel(), vv.ravel()], axis=1).reshape(-1, 1, 2)
-    xn = cv2.undistortPointsIter(pix, np.asarray(cam.K, float), np.asarray(cam.dist, float), None, None,
-                                 (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 40, 1e-10)).reshape(-1, 2)
-    d = np.hstack([xn, np.ones((len(xn), 1))]) @ cam.R  # world rays
-    C = cam.centre
-    n = R_b[:, 2]  # the board's normal in the world
-    denom = d @ n
-    with np.errstate(divide="ignore", invalid="ignore"):
-        lam = ((t_b - C) @ n) / denom
-    X = C + lam[:, None] * d
-    p = (X - t_b) @ R_b  # board coordinates: R_b^T (X - t_b)
-    mx = ((p[:, 0] - x0) * PX_PER_M).astype(np.float32).reshape(h, w)
-    my = ((p[:, 1] - y0) * PX_PER_M).astype(np.float32).reshape(h, w)
-    bad = ~(lam > 0).reshape(h, w)
+    h, w = cam.height * ss, cam.width * ss
+    x, y, dark = _rays(cam, ss)
+    # the board's plane maps to the normalised picture by a homography: [x y 1] ~ H [bx by 1]
+    R = cam.R
+    H = np.column_stack([R @ R_b[:, 0], R @ R_b[:, 1], R @ t_b + np.asarray(cam.tvec, float).ravel()])
+    A = np.linalg.inv(H)
+    q2 = (A[2, 0] * x + A[2, 1] * y + A[2, 2]).astype(np.float32)  # 1 / depth: positive in front
+    bad = ~(q2 > 0)
+    q2[bad] = 1.0
+    # texel i spans [i - 0.5, i + 0.5) in cv2.remap's coordinates: its edge at i - 0.5 is board
+    # coordinate x0 + i / PX_PER_M
+    mx = ((A[0, 0] * x + A[0, 1] * y + A[0, 2]) / q2 - x0) * PX_PER_M - 0.5
+    my = ((A[1, 0] * x + A[1, 1] * y + A[1, 2]) / q2 - y0) * PX_PER_M - 0.5
+    mx = mx.astype(np.float32)
+    my = my.astype(np.float32)
     mx[bad] = -1e6
     my[bad] = -1e6
-    # supersample the texture's footprint: a pixel covers many texels, so average them first
+    # a sample covering many texels averages them first
     scale = float(np.nanmedian(np.abs(np.diff(mx, axis=1))[~bad[:, 1:]])) if (~bad).any() else 1.0
-    k = max(1, int(scale))
+    k = max(1, int(scale)) | 1  # odd: a centred box moves no edge
     src = cv2.blur(tex, (k, k)) if k > 1 else tex
     img = cv2.remap(src, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=128)
-    img = cv2.GaussianBlur(img.astype(np.float32), (0, 0), 0.6)
+    img = np.where(dark, 0, img).astype(np.float32).reshape(cam.height, ss, cam.width, ss).mean(axis=(1, 3))
+    img = cv2.GaussianBlur(img, (0, 0), 0.6)
     if rng is not None and noise > 0:
         img = img + rng.normal(0, noise, img.shape)
     return np.clip(img, 0, 255).astype(np.uint8)

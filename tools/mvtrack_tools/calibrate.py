@@ -2,7 +2,7 @@
 the floor, and the checks that catch a bad rig. Writes the rig file mvtrackd reads (OpenCV FileStorage YAML).
 
     tools/mvtrack calibrate intrinsics --rig RIG.yaml --camera NAME (--images GLOB | --video FILE)
-                                       --board chessboard:COLSxROWS:SQUARE_M [--rational]
+                                       --board chessboard:COLSxROWS:SQUARE_M [--rational] [--plot FILE.png]
     tools/mvtrack calibrate extrinsics --rig RIG.yaml --camera NAME --points POINTS.csv
     tools/mvtrack calibrate extrinsics --rig RIG.yaml --camera NAME --image FLOOR.png
                                        --board charuco:COLSxROWS:SQUARE_M:MARKER_M[:DICT]
@@ -20,8 +20,12 @@ for coverage of the picture (a 4 x 4 grid) and of tilts (the board's normal in 3
 view the fit leaves over three times the median error (and over 1 px) is dropped and the fit redone.
 OpenCV's model with 5 coefficients (8 with --rational); the highest radial terms (k3, and k4-k6
 with --rational) are fitted only when the Bayesian information criterion of the residuals asks
-for them (otherwise zero: they bend the model at the rim, beyond the boards). Prints the RMS, each
-view's error, and the picture's cells no view covered.
+for them (otherwise zero: they bend the model at the rim, beyond the boards). Every corner is
+refined to the picture's saddle point around it (the detectors' own estimates are biased by up to
+several tenths of a pixel on small, tilted or bent boards). Prints the RMS, each view's error, the
+picture's cells no view covered, and how well the lens is known: the one-sigma pixel error of the
+lens model (from the fit's covariance, each view's pose a nuisance) at worst where the boards were
+and over the whole picture; --plot draws it over the picture with the corners used.
 
 extrinsics: cv2.solvePnP (SQPNP) refined by Levenberg-Marquardt. Prints the reprojection error in
 pixels and, for points on the floor (z = 0), the error in metres on the floor.
@@ -97,12 +101,43 @@ class Board:
             ok, corners = cv2.findChessboardCornersSB(gray, (self.cols, self.rows), flags=cv2.CALIB_CB_ACCURACY)
             if not ok:
                 return None
-            return corners.reshape(-1, 2).astype(np.float32), self.object_points()
-        corners, ids, _, _ = self.detector.detectBoard(gray)
-        if ids is None or len(ids) < 6:
-            return None
-        obj = self.object_points()[ids.ravel()]
-        return corners.reshape(-1, 2).astype(np.float32), obj
+            img, obj = corners.reshape(-1, 2).astype(np.float32), self.object_points()
+        else:
+            corners, ids, _, _ = self.detector.detectBoard(gray)
+            if ids is None or len(ids) < 6:
+                return None
+            img, obj = corners.reshape(-1, 2).astype(np.float32), self.object_points()[ids.ravel()]
+        # the window reaches a little under half-way to the next corner on a chessboard; on ChArUco a
+        # little under the white margin between the corner and the nearest marker
+        reach = 0.4 if self.kind == "chessboard" else min(0.4, 0.9 * (self.square - self.marker) / (2 * self.square))
+        return refine_corners(gray, img, obj, self.square, reach), obj
+
+
+def refine_corners(gray: np.ndarray, img: np.ndarray, obj: np.ndarray, square: float, reach: float) -> np.ndarray:
+    """Each corner moved to the saddle point of the picture around it (cv2.cornerSubPix: the point
+    every image gradient in the window is orthogonal to), in a window that stays inside the four
+    squares meeting there and clear of their markers (reach times the nearest neighbouring corner's
+    distance, 2-6 px each way). The detectors' own estimates are biased by up to several tenths of a pixel where
+    the board is small, tilted or bent by the lens; the saddle point is not, the picture's
+    noise aside."""
+    if len(img) < 2:
+        return img
+    d_img = np.linalg.norm(img[:, None, :] - img[None, :, :], axis=2)
+    d_obj = np.linalg.norm(obj[:, None, :2] - obj[None, :, :2], axis=2)
+    near = np.isclose(d_obj, square, rtol=0.01)  # the corner's neighbours along a row or column
+    out = img.copy()
+    crit = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 50, 1e-4)
+    spacing = np.where(near, d_img, np.inf).min(axis=1)
+    spacing[~np.isfinite(spacing)] = 0.0  # no neighbour found: the detector's estimate stays (below)
+    half = np.clip((reach * spacing).astype(int), 2, 6)
+    for r in np.unique(half):
+        sel = half == r
+        pts = img[sel].reshape(-1, 1, 2).copy()
+        out[sel] = cv2.cornerSubPix(gray, pts, (int(r), int(r)), (-1, -1), crit).reshape(-1, 2)
+    # a corner the refinement moved far (another edge in its window) keeps the detector's estimate
+    far = np.linalg.norm(out - img, axis=1) > 0.25 * spacing
+    out[far] = img[far]
+    return out
 
 
 # ---- rig file -------------------------------------------------------------------------------------
@@ -234,13 +269,24 @@ def intrinsics(a) -> dict:
     base = cv2.CALIB_RATIONAL_MODEL if a.rational else 0
 
     def solve_with(vs, flags):
+        # views reaching the picture's rim, where a strong lens bends most, start the fit in the
+        # wrong place (its first guess has no distortion): the lens is first fitted to the views
+        # within 80 % of the half-diagonal, and then to all of them from there
+        centre = np.array([(w - 1) / 2, (h - 1) / 2])
+        inner = [v for v in vs if np.max(np.linalg.norm(v["img"] - centre, axis=1)) <= 0.8 * np.hypot(*centre)]
+        K0, d0 = None, None
+        if 6 <= len(inner) < len(vs):
+            _, K0, d0, _, _ = cv2.calibrateCamera([v["obj"] for v in inner], [v["img"] for v in inner], (w, h), None,
+                                                  None, flags=flags)
+            flags |= cv2.CALIB_USE_INTRINSIC_GUESS
         rms_, K_, dist_, rvecs_, tvecs_ = cv2.calibrateCamera([v["obj"] for v in vs], [v["img"] for v in vs], (w, h),
-                                                              None, None, flags=flags)
+                                                              K0, d0, flags=flags)
         errs = []
         for v, r, t in zip(vs, rvecs_, tvecs_):
             p, _ = cv2.projectPoints(v["obj"], r, t, K_, dist_)
             errs.append(float(np.sqrt(np.mean(np.sum((p.reshape(-1, 2) - v["img"]) ** 2, axis=1)))))
-        return rms_, K_, dist_, errs
+        fixed_terms = [4, 5, 6, 7] if flags & cv2.CALIB_FIX_K3 else []
+        return rms_, K_, dist_, errs, (rvecs_, tvecs_, fixed_terms)
 
     def solve(vs):
         """The lens's highest radial term (k3; k4-k6 too with --rational) only where the views ask
@@ -256,7 +302,7 @@ def intrinsics(a) -> dict:
         bic_fix = 2 * n * np.log(r_fix[0])
         return r_free if bic_free < bic_fix else r_fix
 
-    rms, K, dist, per_view = solve(views)
+    rms, K, dist, per_view, fit = solve(views)
     # a view the model cannot fit (corners found in the wrong order, a board that bent) is dropped
     # and the calibration done again without it
     med_err = float(np.median(per_view))
@@ -265,10 +311,13 @@ def intrinsics(a) -> dict:
     if bad and len(views) - len(bad) >= 3:
         dropped = [views[i]["index"] for i in bad]
         views = [v for i, v in enumerate(views) if i not in bad]
-        rms, K, dist, per_view = solve(views)
+        rms, K, dist, per_view, fit = solve(views)
+    n_dist = 8 if a.rational else 5
+    free = [j for j in range(n_dist) if j not in fit[2]]
+    corners = np.vstack([v["img"] for v in views])
+    unc = lens_uncertainty(views, K, dist.ravel()[:n_dist], fit[0], fit[1], free, w, h, corners)
     covered = set().union(*(v["cells"] for v in views))
     missing = sorted({(i, j) for i in range(4) for j in range(4)} - covered)
-    n_dist = 8 if a.rational else 5
     cam = Camera(a.camera, K, dist.ravel()[:n_dist], np.zeros(3), np.zeros(3), w, h, 2.0)
     if rig is None:
         rig = new_rig(cam)
@@ -292,9 +341,92 @@ def intrinsics(a) -> dict:
     if missing:
         print("  picture cells (column, row of a 4 x 4 grid) no view covered: " +
               " ".join(f"({i},{j})" for i, j in missing), file=sys.stderr)
+    print(f"  the lens is known to {unc['covered_px']:.2f} px (one standard deviation, at worst) where the boards "
+          f"were ({100 * unc['covered_share']:.0f} % of the picture), {unc['picture_px']:.2f} px over the whole "
+          "picture (beyond the boards the model extrapolates); more views, and views where it is largest, lower it",
+          file=sys.stderr)
+    if a.plot:
+        plot_lens(unc, corners, w, h, a.camera, a.plot)
     return {"camera": a.camera, "rms_px": float(rms), "views": len(views), "per_view_px": per_view, "dropped": dropped,
             "camera_matrix": K.tolist(), "distortion": dist.ravel()[:n_dist].tolist(),
-            "uncovered_cells": [list(c) for c in missing]}
+            "uncovered_cells": [list(c) for c in missing],
+            "lens_sigma_px": {"covered": unc["covered_px"], "picture": unc["picture_px"],
+                              "covered_share": unc["covered_share"]}}
+
+
+def lens_uncertainty(views: list[dict], K: np.ndarray, dist: np.ndarray, rvecs, tvecs, free: list[int], w: int,
+                     h: int, corners: np.ndarray, grid: tuple[int, int] = (48, 36)) -> dict:
+    """How well the fit knows the lens, over the picture: the covariance of the intrinsics (focal
+    lengths, principal point, the distortion terms fitted) from the fit's Jacobian, every view's pose
+    a nuisance parameter, scaled by the residuals' variance; propagated to the pixel that each ray of
+    a grid over the picture projects to, after the rotation that fits the grid best (a camera's
+    orientation comes from its extrinsics, so an error the rotation absorbs is no error of the
+    lens). Corner noise that is independent between corners is assumed: a biased corner detector
+    makes the lens worse than this says. Returns the grid, each point's largest one-sigma error (px),
+    and the worst of it where the views' corners were (their convex hull) and over the picture."""
+    cols = [0, 1, 2, 3] + [4 + j for j in free]
+    p = len(cols)
+    n_par = p + 6 * len(views)
+    JtJ = np.zeros((n_par, n_par))
+    res2, n_obs = 0.0, 0
+    for k, (v, r, t) in enumerate(zip(views, rvecs, tvecs)):
+        proj, J = cv2.projectPoints(v["obj"], r, t, K, dist)
+        e = proj.reshape(-1, 2) - v["img"]
+        res2 += float(np.sum(e ** 2))
+        n_obs += e.size
+        A = np.zeros((J.shape[0], n_par))
+        A[:, :p] = J[:, 6:][:, cols]
+        A[:, p + 6 * k:p + 6 * k + 6] = J[:, :6]
+        JtJ += A.T @ A
+    s2 = res2 / max(n_obs - n_par, 1)
+    dn = 1.0 / np.sqrt(np.maximum(np.diag(JtJ), 1e-300))  # scaled to unit diagonal: the terms differ by 10^6
+    cov = s2 * (dn[:p, None] * np.linalg.pinv(dn[:, None] * JtJ * dn[None, :], hermitian=True)[:p, :p] * dn[None, :p])
+    uu, vv = np.meshgrid(np.linspace(0, w - 1, grid[0]), np.linspace(0, h - 1, grid[1]))
+    pix = np.stack([uu.ravel(), vv.ravel()], axis=1)
+    hull = cv2.convexHull(corners.astype(np.float32))
+    inside = np.array([cv2.pointPolygonTest(hull, (float(x), float(y)), False) >= 0 for x, y in pix])
+    xn = cv2.undistortPointsIter(pix.reshape(-1, 1, 2), K, dist, None, None,
+                                 (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 50, 1e-12)).reshape(-1, 2)
+    X = np.hstack([xn, np.ones((len(xn), 1))])
+    _, Jg = cv2.projectPoints(X, np.zeros(3), np.zeros(3), K, dist)
+    lam, V = np.linalg.eigh(0.5 * (cov + cov.T))
+    L = V * np.sqrt(np.maximum(lam, 0.0))  # cov = L L^T
+
+    def sigma(sel: np.ndarray) -> np.ndarray:
+        rows = np.repeat(np.flatnonzero(sel) * 2, 2) + np.tile([0, 1], int(sel.sum()))
+        Jt, Jr = Jg[rows][:, 6:][:, cols], Jg[rows][:, :3]
+        M = Jt - Jr @ np.linalg.lstsq(Jr, Jt, rcond=None)[0]  # what no rotation absorbs
+        Q = (M @ L).reshape(-1, 2, p)
+        C = Q @ Q.transpose(0, 2, 1)  # each point's 2 x 2 covariance
+        return np.sqrt(np.linalg.eigvalsh(C)[:, 1])
+
+    every = sigma(np.ones(len(pix), bool))
+    covered = sigma(inside) if inside.sum() >= 4 else every
+    return {"grid": pix, "sigma": every, "covered_px": float(covered.max()), "picture_px": float(every.max()),
+            "covered_share": float(cv2.contourArea(hull)) / (w * h)}
+
+
+def plot_lens(unc: dict, corners: np.ndarray, w: int, h: int, name: str, path: str) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    g = unc["grid"]
+    nx = len(np.unique(g[:, 0]))
+    fig, ax = plt.subplots(figsize=(8, 6.2))
+    im = ax.imshow(unc["sigma"].reshape(-1, nx), extent=(0, w - 1, h - 1, 0), cmap="magma", interpolation="bilinear",
+                   norm=matplotlib.colors.LogNorm(vmin=max(1e-3, unc["sigma"].min()), vmax=max(unc["sigma"].max(), 1e-2)))
+    fig.colorbar(im, ax=ax, label="the lens's one-sigma error (px)")
+    ax.plot(corners[:, 0], corners[:, 1], ".", color="cyan", ms=1.5)
+    hull = cv2.convexHull(corners.astype(np.float32)).reshape(-1, 2)
+    ax.plot(np.r_[hull[:, 0], hull[0, 0]], np.r_[hull[:, 1], hull[0, 1]], color="white", lw=1)
+    ax.set_xlim(0, w - 1)
+    ax.set_ylim(h - 1, 0)
+    ax.set_title(f"{name}: how well the lens is known (one sigma)\n{unc['covered_px']:.2f} px at worst inside the "
+                 f"corners' hull (white), {unc['picture_px']:.2f} px over the picture", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
 
 
 # ---- extrinsics ---------------------------------------------------------------------------------
@@ -657,6 +789,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--rational", action="store_true", help="8 coefficients (wide lenses)")
     p.add_argument("--max-views", type=int, default=40, help="views used at most (default 40)")
     p.add_argument("--every", type=int, default=10, help="--video: every N-th frame (default 10)")
+    p.add_argument("--plot", help="a picture of how well the lens is known over the picture, with the corners (PNG)")
     p = sub.add_parser("extrinsics", help="a camera's place in the world (metres, z up, floor z = 0)")
     p.add_argument("--rig", required=True)
     p.add_argument("--camera", required=True)
