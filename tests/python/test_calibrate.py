@@ -13,9 +13,9 @@ import cv2
 import numpy as np
 import pytest
 
-from mvtrack_tools.board_render import inverse_lens, pose_in_front, render
+from mvtrack_tools.board_render import pose_in_front, render
 from mvtrack_tools.calibrate import Board
-from mvtrack_tools.rig import Rig, intrinsics, look_at, smartroom
+from mvtrack_tools.rig import Rig, intrinsics, look_at, normalise, smartroom
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -56,9 +56,7 @@ def picture_error(true_cam, K: np.ndarray, dist: np.ndarray, hull: np.ndarray | 
     if hull is not None:
         hh = cv2.convexHull(hull.astype(np.float32))
         pix = pix[[cv2.pointPolygonTest(hh, (float(x), float(y)), False) >= 0 for x, y in pix]]
-    xn = cv2.undistortPointsIter(pix.reshape(-1, 1, 2), np.asarray(true_cam.K, float), np.asarray(true_cam.dist, float),
-                                 None, None, (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 50, 1e-12)).reshape(-1, 2)
-    xn = inverse_lens(true_cam, pix, xn)
+    xn, _ = normalise(true_cam.K, true_cam.dist, pix)
     # a pixel beyond the fold of the true lens's polynomial has no ray (no real lens shows it)
     back, _ = cv2.projectPoints(np.hstack([xn, np.ones((len(xn), 1))]), np.zeros(3), np.zeros(3),
                                 np.asarray(true_cam.K, float), np.asarray(true_cam.dist, float))

@@ -2,10 +2,10 @@
 
 A board (chessboard or ChArUco, from the same spec strings as calibrate.py) is a texture on a plane
 with pose (R_b, t_b): board point p (metres, z = 0 on the board) is world point R_b p + t_b. Every
-picture pixel is cast back through the camera (its lens included, cv2.undistortPoints) onto the
-board's plane and takes the texture there (bilinear, 3 x 3 samples a pixel averaged), grey
-elsewhere; a slight optical blur and sensor noise follow. So the corners land where the camera model puts them, to a small fraction of a
-pixel, whatever the distortion.
+picture pixel is cast back through the camera (its lens included, rig.normalise) onto the board's
+plane and takes the texture there (bilinear, 3 x 3 samples a pixel averaged), grey elsewhere,
+dark beyond the lens's fold; a slight optical blur and sensor noise follow. So the corners land
+where the camera model puts them, to a few hundredths of a pixel, whatever the distortion.
 """
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ import cv2
 import numpy as np
 
 from .calibrate import Board
-from .rig import Camera
+from .rig import Camera, normalise
 
 PX_PER_M = 2000.0  # texture resolution
 
@@ -53,66 +53,10 @@ def _rays(cam: Camera, ss: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         u = (np.arange(cam.width)[:, None] + sub[None, :]).ravel()
         v = (np.arange(cam.height)[:, None] + sub[None, :]).ravel()
         uu, vv = np.meshgrid(u, v)
-        pix = np.stack([uu.ravel(), vv.ravel()], axis=1).reshape(-1, 1, 2)
-        xn = cv2.undistortPointsIter(pix, np.asarray(cam.K, float), np.asarray(cam.dist, float), None, None,
-                                     (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 40, 1e-10)).reshape(-1, 2)
-        xn = inverse_lens(cam, pix.reshape(-1, 2), xn)
-        # beyond the fold of the lens's polynomial a pixel has no ray: no light reaches it
-        fx, fy = _distort(_coeffs(cam), xn[:, 0], xn[:, 1])
-        K = np.asarray(cam.K, float)
-        dark = np.hypot(fx * K[0, 0] + K[0, 2] - pix[:, 0, 0], fy * K[1, 1] + K[1, 2] - pix[:, 0, 1]) > 1e-3
+        xn, has_ray = normalise(cam.K, cam.dist, np.stack([uu.ravel(), vv.ravel()], axis=1))
         _RAYS[key] = (xn[:, 0].reshape(uu.shape).astype(np.float32), xn[:, 1].reshape(uu.shape).astype(np.float32),
-                      dark.reshape(uu.shape))
+                      ~has_ray.reshape(uu.shape))
     return _RAYS[key]
-
-
-def _distort(d: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """OpenCV's lens model: normalised (x, y) to distorted normalised coordinates."""
-    r2 = x * x + y * y
-    rad = (1 + r2 * (d[0] + r2 * (d[1] + r2 * d[4]))) / (1 + r2 * (d[5] + r2 * (d[6] + r2 * d[7])))
-    return (x * rad + 2 * d[2] * x * y + d[3] * (r2 + 2 * x * x),
-            y * rad + d[2] * (r2 + 2 * y * y) + 2 * d[3] * x * y)
-
-
-def _coeffs(cam: Camera) -> np.ndarray:
-    d = np.zeros(8)
-    dist = np.asarray(cam.dist, float).ravel()[:8]
-    d[:len(dist)] = dist
-    return d
-
-
-def inverse_lens(cam: Camera, pix: np.ndarray, xn: np.ndarray, iters: int = 12) -> np.ndarray:
-    """The normalised points the lens maps to pixels pix, polished by Newton's method from the
-    estimate xn. cv2.undistortPoints' fixed-point iteration stalls where the distorted radius grows
-    slowly with the true one (a strong barrel lens's picture corners) and leaves pixels off there;
-    Newton's steps converge wherever the map is still increasing."""
-    d = _coeffs(cam)
-    K = np.asarray(cam.K, float)
-    tx = (pix[:, 0] - K[0, 2]) / K[0, 0]
-    ty = (pix[:, 1] - K[1, 2]) / K[1, 1]
-    x, y = xn[:, 0].astype(np.float64).copy(), xn[:, 1].astype(np.float64).copy()
-    h = 1e-6
-    for _ in range(iters):
-        fx, fy = _distort(d, x, y)
-        ex, ey = fx - tx, fy - ty
-        ax, ay = _distort(d, x + h, y)
-        bx, by = _distort(d, x, y + h)
-        j11, j21 = (ax - fx) / h, (ay - fy) / h
-        j12, j22 = (bx - fx) / h, (by - fy) / h
-        det = j11 * j22 - j12 * j21
-        ok = np.abs(det) > 1e-9
-        det = np.where(ok, det, 1.0)
-        sx = np.where(ok, (j22 * ex - j12 * ey) / det, 0.0)
-        sy = np.where(ok, (j11 * ey - j21 * ex) / det, 0.0)
-        e0 = ex * ex + ey * ey
-        step = np.zeros_like(x)
-        for t in (1.0, 0.5, 0.25, 0.125):  # the longest step that lowers the error
-            gx, gy = _distort(d, x - t * sx, y - t * sy)
-            better = (step == 0) & ((gx - tx) ** 2 + (gy - ty) ** 2 < e0)
-            step[better] = t
-        x -= step * sx
-        y -= step * sy
-    return np.stack([x, y], axis=1)
 
 
 def render(cam: Camera, board: Board, R_b: np.ndarray, t_b: np.ndarray, rng: np.random.Generator | None = None,

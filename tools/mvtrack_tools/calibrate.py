@@ -53,7 +53,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from .rig import Camera, Rig
+from .rig import Camera, Rig, normalise
 
 HEAD_M = 1.7
 
@@ -117,9 +117,9 @@ def refine_corners(gray: np.ndarray, img: np.ndarray, obj: np.ndarray, square: f
     """Each corner moved to the saddle point of the picture around it (cv2.cornerSubPix: the point
     every image gradient in the window is orthogonal to), in a window that stays inside the four
     squares meeting there and clear of their markers (reach times the nearest neighbouring corner's
-    distance, 2-6 px each way). The detectors' own estimates are biased by up to several tenths of a pixel where
-    the board is small, tilted or bent by the lens; the saddle point is not, the picture's
-    noise aside."""
+    distance, 2-6 px each way). The detectors' own estimates are biased by up to several tenths of
+    a pixel where the board is small, tilted or bent by the lens; the saddle point is not, the
+    picture's noise aside."""
     if len(img) < 2:
         return img
     d_img = np.linalg.norm(img[:, None, :] - img[None, :, :], axis=2)
@@ -385,8 +385,7 @@ def lens_uncertainty(views: list[dict], K: np.ndarray, dist: np.ndarray, rvecs, 
     pix = np.stack([uu.ravel(), vv.ravel()], axis=1)
     hull = cv2.convexHull(corners.astype(np.float32))
     inside = np.array([cv2.pointPolygonTest(hull, (float(x), float(y)), False) >= 0 for x, y in pix])
-    xn = cv2.undistortPointsIter(pix.reshape(-1, 1, 2), K, dist, None, None,
-                                 (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 50, 1e-12)).reshape(-1, 2)
+    xn, _ = normalise(K, dist, pix)
     X = np.hstack([xn, np.ones((len(xn), 1))])
     _, Jg = cv2.projectPoints(X, np.zeros(3), np.zeros(3), K, dist)
     lam, V = np.linalg.eigh(0.5 * (cov + cov.T))

@@ -13,13 +13,70 @@ import cv2
 import numpy as np
 
 
-def _radial_map(dist: tuple, r: np.ndarray) -> np.ndarray:
-    """OpenCV's radial distortion of a normalised radius: r (1 + k1 r^2 + k2 r^4 + k3 r^6) /
-    (1 + k4 r^2 + k5 r^4 + k6 r^6)."""
+def _coeffs(dist) -> np.ndarray:
+    """OpenCV's distortion coefficients k1 k2 p1 p2 k3 k4 k5 k6, zero where not given."""
     d = np.zeros(8)
+    dist = np.asarray(dist, float).ravel()[:8]
     d[:len(dist)] = dist
-    r2 = r * r
-    return r * (1 + r2 * (d[0] + r2 * (d[1] + r2 * d[4]))) / (1 + r2 * (d[5] + r2 * (d[6] + r2 * d[7])))
+    return d
+
+
+def _radial(d: np.ndarray, r2: np.ndarray) -> np.ndarray:
+    """OpenCV's radial factor (1 + k1 r^2 + k2 r^4 + k3 r^6) / (1 + k4 r^2 + k5 r^4 + k6 r^6)."""
+    return (1 + r2 * (d[0] + r2 * (d[1] + r2 * d[4]))) / (1 + r2 * (d[5] + r2 * (d[6] + r2 * d[7])))
+
+
+def _radial_map(dist: tuple, r: np.ndarray) -> np.ndarray:
+    """OpenCV's radial distortion of a normalised radius r."""
+    return r * _radial(_coeffs(dist), r * r)
+
+
+def _distort(d: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """OpenCV's lens model: normalised (x, y) to distorted normalised coordinates."""
+    r2 = x * x + y * y
+    rad = _radial(d, r2)
+    return (x * rad + 2 * d[2] * x * y + d[3] * (r2 + 2 * x * x),
+            y * rad + d[2] * (r2 + 2 * y * y) + 2 * d[3] * x * y)
+
+
+def normalise(K: np.ndarray, dist, pix: np.ndarray, iters: int = 12) -> tuple[np.ndarray, np.ndarray]:
+    """The normalised image points (N x 2) the lens maps to pixels pix (N x 2), and which pixels
+    have one. cv2.undistortPoints' fixed-point iteration starts it; damped Newton steps finish it:
+    the fixed point stalls where the distorted radius grows slowly with the true one (a strong
+    barrel lens's picture corners) and leaves pixels off there. Beyond the fold of the lens's
+    polynomial a pixel has no ray (no light reaches it)."""
+    K = np.asarray(K, float)
+    d = _coeffs(dist)
+    pix = np.asarray(pix, float).reshape(-1, 2)
+    xn = cv2.undistortPointsIter(pix.reshape(-1, 1, 2), K, d, None, None,
+                                 (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 40, 1e-10)).reshape(-1, 2)
+    tx = (pix[:, 0] - K[0, 2]) / K[0, 0]
+    ty = (pix[:, 1] - K[1, 2]) / K[1, 1]
+    x, y = xn[:, 0].copy(), xn[:, 1].copy()
+    h = 1e-6
+    for _ in range(iters):
+        fx, fy = _distort(d, x, y)
+        ex, ey = fx - tx, fy - ty
+        ax, ay = _distort(d, x + h, y)
+        bx, by = _distort(d, x, y + h)
+        j11, j21 = (ax - fx) / h, (ay - fy) / h
+        j12, j22 = (bx - fx) / h, (by - fy) / h
+        det = j11 * j22 - j12 * j21
+        ok = np.abs(det) > 1e-9
+        det = np.where(ok, det, 1.0)
+        sx = np.where(ok, (j22 * ex - j12 * ey) / det, 0.0)
+        sy = np.where(ok, (j11 * ey - j21 * ex) / det, 0.0)
+        e0 = ex * ex + ey * ey
+        step = np.zeros_like(x)
+        for t in (1.0, 0.5, 0.25, 0.125):  # the longest step that lowers the error
+            gx, gy = _distort(d, x - t * sx, y - t * sy)
+            better = (step == 0) & ((gx - tx) ** 2 + (gy - ty) ** 2 < e0)
+            step[better] = t
+        x -= step * sx
+        y -= step * sy
+    fx, fy = _distort(d, x, y)
+    has_ray = np.hypot((fx - tx) * K[0, 0], (fy - ty) * K[1, 1]) < 1e-3
+    return np.stack([x, y], axis=1), has_ray
 
 
 @functools.lru_cache(maxsize=256)
