@@ -25,12 +25,15 @@ refined to the picture's saddle point around it (the detectors' own estimates ar
 several tenths of a pixel on small, tilted or bent boards). Prints the RMS, each view's error, the
 picture's cells no view covered, and how well the lens is known: the one-sigma pixel error of the
 lens model (from the fit's covariance, each view's pose a nuisance) at worst where the boards were
-and over the whole picture; --plot draws it over the picture with the corners used.
+and over the whole picture; --plot draws it over the picture with the corners used. A fitted model
+that turns back inside the picture is warned of (check notes it too): the pixels beyond have no
+ray, which is right only for the dark beyond a fisheye's image circle.
 
 extrinsics: cv2.solvePnP (SQPNP) refined by Levenberg-Marquardt. Prints the reprojection error in
 pixels and, for points on the floor (z = 0), the error in metres on the floor.
 
-check: per camera its height, where it looks, whether it is under the floor or looks away from it;
+check: per camera its height, where it looks, whether it is under the floor or looks away from it,
+and (a note, not a problem) whether its lens model turns back inside its picture;
 the floor's coverage at head height (1.7 m) by two cameras or more; each pair's overlap; with
 --log (DETECTIONS_ and TRACKS of a recording, or --tracks from mvtrackd's output), each pair of
 cameras' mean gap between their rays at the heads of the tracks both saw: a camera whose gaps to
@@ -53,7 +56,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from .rig import Camera, Rig, normalise
+from .rig import Camera, Rig, lens_reach, normalise
 
 HEAD_M = 1.7
 
@@ -345,13 +348,17 @@ def intrinsics(a) -> dict:
           f"were ({100 * unc['covered_share']:.0f} % of the picture), {unc['picture_px']:.2f} px over the whole "
           "picture (beyond the boards the model extrapolates); more views, and views where it is largest, lower it",
           file=sys.stderr)
+    reach = lens_reach(cam)
+    if reach < 1.0:
+        print(f"  warning: {fold_message(reach)}", file=sys.stderr)
     if a.plot:
         plot_lens(unc, corners, w, h, a.camera, a.plot)
     return {"camera": a.camera, "rms_px": float(rms), "views": len(views), "per_view_px": per_view, "dropped": dropped,
             "camera_matrix": K.tolist(), "distortion": dist.ravel()[:n_dist].tolist(),
             "uncovered_cells": [list(c) for c in missing],
             "lens_sigma_px": {"covered": unc["covered_px"], "picture": unc["picture_px"],
-                              "covered_share": unc["covered_share"]}}
+                              "covered_share": unc["covered_share"]},
+            "lens_reach": reach if np.isfinite(reach) else None}
 
 
 def lens_uncertainty(views: list[dict], K: np.ndarray, dist: np.ndarray, rvecs, tvecs, free: list[int], w: int,
@@ -684,6 +691,13 @@ def consistency(rig: Rig, log: str, tracks_log: str | None = None) -> dict:
             "per_camera_m": {names[k]: v for k, v in per_cam.items()}, "inconsistent": flagged}
 
 
+def fold_message(reach: float) -> str:
+    """What a lens model that turns back inside its picture (rig.lens_reach under 1) means to a user."""
+    return (f"its lens model turns back at {100 * reach:.1f} % of the way to the picture's corners: the pixels "
+            "beyond have no ray (right for the dark beyond a fisheye's image circle; where the picture shows "
+            "the room there, the fit extrapolated past the boards: add views there)")
+
+
 def check(a) -> dict:
     rig = load_rig(Path(a.rig), must_exist=True)
     lo, hi = np.asarray(rig.volume_min, float), np.asarray(rig.volume_max, float)
@@ -714,15 +728,17 @@ def check(a) -> dict:
             flags.append("no other camera overlaps it")
         if not seen[k].any():
             flags.append("sees no head-height point of the volume")
+        reach = lens_reach(c)
+        notes = [fold_message(reach)] if reach < 1.0 else []
         problems += [f"{c.name}: {f}" for f in flags]
         cams.append({"name": c.name, "height_m": float(C[2]), "position_m": C.tolist(),
                      "looks_down_deg": float(np.degrees(np.arcsin(np.clip(-axis[2], -1, 1)))),
-                     "looks_at_floor_m": floor_pt, "overlaps": overlap, "flags": flags,
+                     "looks_at_floor_m": floor_pt, "overlaps": overlap, "flags": flags, "notes": notes,
                      "floor_seen_share": float(seen[k].mean())})
         print(f"{c.name}: {C[2]:.2f} m above the floor at ({C[0]:.2f}, {C[1]:.2f}), looking "
               f"{cams[-1]['looks_down_deg']:.0f} deg down" + (f" at ({floor_pt[0]:.2f}, {floor_pt[1]:.2f})" if floor_pt else "")
               + f"; sees {100 * seen[k].mean():.0f} % of the floor at {HEAD_M} m"
-              + ("; " + "; ".join(flags) if flags else ""), file=sys.stderr)
+              + ("; " + "; ".join(flags + notes) if flags or notes else ""), file=sys.stderr)
     share2 = float((n_seen >= 2).mean())
     print(f"floor at head height seen by two cameras or more: {100 * share2:.0f} %", file=sys.stderr)
     out = {"cameras": cams, "floor_seen_by_2": share2, "problems": problems}

@@ -281,18 +281,19 @@ def smartroom(sigma_px: float = 2.0) -> Rig:
     return Rig(cams, np.array([0.0, 0.0, 0.0]), np.array([L, W, 2.5]), 25.0)
 
 
-def _lens_covers_image(cam: Camera, margin: float) -> bool:
-    """The largest distorted radius the model reaches (at its fold) exceeds margin x the farthest
-    image corner's distorted normalised radius."""
+def lens_reach(cam: Camera) -> float:
+    """How far the lens model reaches across the picture: the largest distorted radius it forms (at
+    its fold) over the farthest picture corner's distorted normalised radius. Under 1 the polynomial
+    turns back inside the picture: pixels beyond have no ray, and a real lens has no such fold, so a
+    calibration showing one has extrapolated past its boards. inf when it never folds."""
     corners = np.array([[0, 0], [cam.width - 1, 0], [0, cam.height - 1], [cam.width - 1, cam.height - 1]], float)
     xd = (corners[:, 0] - cam.K[0, 2]) / cam.K[0, 0]
     yd = (corners[:, 1] - cam.K[1, 2]) / cam.K[1, 1]
     rd = float(np.max(np.hypot(xd, yd)))
     r2 = cam.field_r2
     if not np.isfinite(r2):
-        return True
-    g = float(_radial_map(tuple(np.asarray(cam.dist, float).ravel()[:8]), np.array([np.sqrt(r2)]))[0])
-    return g > margin * rd
+        return float("inf")
+    return float(_radial_map(tuple(np.asarray(cam.dist, float).ravel()[:8]), np.array([np.sqrt(r2)]))[0]) / rd
 
 
 def random_rig(rng: np.random.Generator, n_cameras: int, room=(7.0, 6.0, 3.0), width: int | None = None,
@@ -320,7 +321,7 @@ def random_rig(rng: np.random.Generator, n_cameras: int, room=(7.0, 6.0, 3.0), w
         # A calibration is valid over the picture it was made from: the radial map must still rise
         # 10 % beyond the image corners. A draw that folds inside is flattened (no extra random draws,
         # so rigs whose lenses were valid stay as they were).
-        while not _lens_covers_image(cam, 1.1):
+        while lens_reach(cam) <= 1.1:
             cam.dist[[0, 1, 4]] *= 0.8
         cams.append(cam)
     return Rig(cams, np.array([0.0, 0.0, 0.0]), np.array([L, W, 2.5]), 25.0)
