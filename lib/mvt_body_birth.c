@@ -256,6 +256,11 @@ static int admissible(const mvt_tracker_t *self, const mvt_frame_t *frame, const
         return 0; /* a merged blob's top is its track's displaced head as much as anyone's: one view
                      does not tell them apart */
     }
+    const mvt_real max_var = self->cfg.numerics.max_pos_std_m * self->cfg.numerics.max_pos_std_m;
+    if (!(cand->P[0] <= max_var) || !(cand->P[4] <= max_var)) {
+        return 0; /* nowhere in particular yet (one view's ray, no feet): a track so spread would end
+                     at once (mvt_body_prune.c), and with it a label it took */
+    }
     const mvt_real sep = MVT_R(2.0) * self->cfg.body.halfwidth_m;
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         const mvt_track_t *tr = &self->tracks[t];

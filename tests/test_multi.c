@@ -563,6 +563,56 @@ static void test_mvt_tracker_step_person_lost_and_back_keeps_identity(void **sta
     assert_true(lost_and_born(near_same, 5.6, &was) > 0 && g_new > was);
 }
 
+/* Found again by one far view first. A tall person (1.90 m) far from camera 0 (about 6 m, the
+ * camera 2.75 m up: its ray to the head falls 0.85 m over 6 m) is tracked by all five cameras, lost
+ * by all of them for 1 s, then seen by camera 0 alone for 0.4 s (the others' frames do not come;
+ * no boxes: no feet) and by all five again. One view's ray there places the head only to about
+ * 0.8 m along it, more than this room's bound on a track's spread (max_pos_std_m 0.6 m; newcomers
+ * every 2 s, birth_per_s 0.5, so that one view's blob is likely enough to start someone): whatever
+ * is born from it must not take the person's label and lose it. For each of 5 seeds the person
+ * ends with the identity they had. */
+static void test_mvt_tracker_step_person_found_by_one_far_view_keeps_identity(void **state)
+{
+    (void)state;
+    for (unsigned long long seed = 1; seed <= 5; seed++) {
+        assert_int_equal(test_room_cameras(g_cams, 1), 0);
+        mvt_tracker_config_t cfg;
+        mvt_tracker_config_default(&cfg);
+        cfg.volume.min[0] = 0; cfg.volume.min[1] = 0; cfg.volume.min[2] = 0;
+        cfg.volume.max[0] = 6; cfg.volume.max[1] = 5; cfg.volume.max[2] = 2.5f;
+        cfg.numerics.max_pos_std_m = 0.6f;
+        cfg.population.birth_per_s = 0.5f;
+        assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, g_cams, 5), MVT_OK);
+        test_rng_t rng = {seed};
+        const mvt_real X[1][3] = {{5.0f, 4.2f, 1.90f}};
+        int64_t t = 1000000;
+        for (int f = 0; f < 25; f++, t += 40000) {
+            frame_of(X, 1, t, &rng, 2.0, 0);
+            mvt_tracker_step(&g_tracker, &g_frame, &g_out);
+        }
+        const int32_t was = id_near(X[0]);
+        assert_true(was > 0);
+        for (int f = 0; f < 25; f++, t += 40000) {
+            frame_of(X, 0, t, &rng, 2.0, 0);
+            mvt_tracker_step(&g_tracker, &g_frame, &g_out);
+        }
+        assert_null(find_id(was));
+        for (int f = 0; f < 10; f++, t += 40000) {
+            frame_of(X, 1, t, &rng, 2.0, 0);
+            for (int k = 1; k < 5; k++) {
+                g_frame.views[k].observed = 0;
+            }
+            assert_int_equal(g_frame.views[0].num_detections, 1);
+            mvt_tracker_step(&g_tracker, &g_frame, &g_out);
+        }
+        for (int f = 0; f < 25; f++, t += 40000) {
+            frame_of(X, 1, t, &rng, 2.0, 0);
+            mvt_tracker_step(&g_tracker, &g_frame, &g_out);
+        }
+        assert_int_equal(id_near(X[0]), was);
+    }
+}
+
 /* A person walks along a side wall, 0.3 m from it, and the detector loses them for 0.6 s: near a
  * wall they may have walked out, but found again where they walked on they keep their identity. */
 static void test_mvt_tracker_step_walker_along_wall_keeps_identity(void **state)
@@ -1194,6 +1244,7 @@ int main(void)
         cmocka_unit_test(test_mvt_tracker_step_more_people_than_capacity_births_refused_counted),
         cmocka_unit_test(test_mvt_tracker_step_person_returns_new_identity),
         cmocka_unit_test(test_mvt_tracker_step_person_lost_and_back_keeps_identity),
+        cmocka_unit_test(test_mvt_tracker_step_person_found_by_one_far_view_keeps_identity),
         cmocka_unit_test(test_mvt_tracker_step_walker_along_wall_keeps_identity),
         cmocka_unit_test(test_mvt_tracker_select_under_capacity_keeps_all_in_order),
         cmocka_unit_test(test_mvt_tracker_step_hidden_in_group_keeps_identity),

@@ -51,7 +51,8 @@ def main(argv: list[str] | None = None) -> int:
     m = clear_mot(frames)
     if a.json:
         json.dump({"switches": [asdict(s) for s in switches], "runs": {str(k): v for k, v in runs.items()},
-                   "mota": m.mota, "idf1": m.idf1, "id_switches": m.id_switches}, sys.stdout, indent=1)
+                   "mota": m.mota, "idf1": m.idf1, "id_switches": m.id_switches, "false_positives": m.false_positives,
+                   "misses": m.misses}, sys.stdout, indent=1)
         print()
         return 0
     t0 = frames[0].utime
