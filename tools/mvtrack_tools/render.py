@@ -214,7 +214,8 @@ class Renderer:
                     h = float(head[2])
                     lo, hi = (0.0, 0.52 * h) if which == 1 else (0.52 * h, h - 0.22)
                     t = _hit_cylinder(C, D, float(head[0]), float(head[1]), TORSO_R if which == 2 else LEGS_R, lo, hi)
-                    body &= ~((label == gid) & (np.abs(t - zbuf) < 1e-6))
+                    with np.errstate(invalid="ignore"):  # no hit on either (inf - inf): not this part
+                        body &= ~((label == gid) & (np.abs(t - zbuf) < 1e-6))
         if m.fragments == "rows":
             body &= ~self.cut_rows[k][:, None]
         fg |= body
