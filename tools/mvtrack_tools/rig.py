@@ -284,8 +284,9 @@ def smartroom(sigma_px: float = 2.0) -> Rig:
 def lens_reach(cam: Camera) -> float:
     """How far the lens model reaches across the picture: the largest distorted radius it forms (at
     its fold) over the farthest picture corner's distorted normalised radius. Under 1 the polynomial
-    turns back inside the picture: pixels beyond have no ray, and a real lens has no such fold, so a
-    calibration showing one has extrapolated past its boards. inf when it never folds."""
+    turns back inside the picture: pixels beyond have no ray, which is right only for the dark beyond
+    a fisheye's image circle; where the picture shows the room there, a calibration showing it has
+    extrapolated past its boards. inf when it never folds."""
     corners = np.array([[0, 0], [cam.width - 1, 0], [0, cam.height - 1], [cam.width - 1, cam.height - 1]], float)
     xd = (corners[:, 0] - cam.K[0, 2]) / cam.K[0, 0]
     yd = (corners[:, 1] - cam.K[1, 2]) / cam.K[1, 1]
