@@ -24,14 +24,20 @@ static mvt_detection_t g_flood[512];
 /* The estimator the tests below run with (the triangulate-then-KF baseline runs some of them again) */
 static mvt_filter_t g_filter = MVT_FILTER_PROJECTIVE;
 
+/* The defaults, the estimator under test and the room's volume (6 x 5 m, heads up to 2.5 m). */
+static void room_config(mvt_tracker_config_t *cfg)
+{
+    mvt_tracker_config_default(cfg);
+    cfg->filter = g_filter;
+    cfg->volume.min[0] = 0; cfg->volume.min[1] = 0; cfg->volume.min[2] = 0;
+    cfg->volume.max[0] = 6; cfg->volume.max[1] = 5; cfg->volume.max[2] = 2.5f;
+}
+
 static void init(void)
 {
     assert_int_equal(test_room_cameras(g_cams, 1), 0);
     mvt_tracker_config_t cfg;
-    mvt_tracker_config_default(&cfg);
-    cfg.filter = g_filter;
-    cfg.volume.min[0] = 0; cfg.volume.min[1] = 0; cfg.volume.min[2] = 0;
-    cfg.volume.max[0] = 6; cfg.volume.max[1] = 5; cfg.volume.max[2] = 2.5f;
+    room_config(&cfg);
     assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, g_cams, 5), MVT_OK);
 }
 
@@ -577,9 +583,7 @@ static void test_mvt_tracker_step_person_found_by_one_far_view_keeps_identity(vo
     for (unsigned long long seed = 1; seed <= 5; seed++) {
         assert_int_equal(test_room_cameras(g_cams, 1), 0);
         mvt_tracker_config_t cfg;
-        mvt_tracker_config_default(&cfg);
-        cfg.volume.min[0] = 0; cfg.volume.min[1] = 0; cfg.volume.min[2] = 0;
-        cfg.volume.max[0] = 6; cfg.volume.max[1] = 5; cfg.volume.max[2] = 2.5f;
+        room_config(&cfg);
         cfg.numerics.max_pos_std_m = 0.6f;
         cfg.population.birth_per_s = 0.5f;
         assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, g_cams, 5), MVT_OK);
@@ -1134,9 +1138,7 @@ static void test_mvt_tracker_step_person_where_one_camera_reaches_kept(void **st
     g_two[0] = g_cams[0];
     g_two[1] = g_cams[4];
     mvt_tracker_config_t cfg;
-    mvt_tracker_config_default(&cfg);
-    cfg.volume.min[0] = 0; cfg.volume.min[1] = 0; cfg.volume.min[2] = 0;
-    cfg.volume.max[0] = 6; cfg.volume.max[1] = 5; cfg.volume.max[2] = 2.5f;
+    room_config(&cfg);
     assert_int_equal(mvt_tracker_init(&g_tracker, &cfg, g_two, 2), MVT_OK);
     test_rng_t rng = {23};
     int64_t t = 1000000;
