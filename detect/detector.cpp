@@ -23,10 +23,6 @@ constexpr float kFeetBandM = 0.2f;  /* the feet and ankles above the floor */
 constexpr float kStackedRowsFilled = 0.9f; /* rows of a standing body's column that are foreground */
 constexpr double kTwoWideM = 0.7;    /* wider than anyone's shoulders (about 0.45 m, the mask's
                                       * closing and blur added) */
-constexpr float kSolidTopM = 0.12f;  /* a head top has at least half a head's height (a head is about
-                                      * 0.23 m) of foreground below it: a thinner sliver joined above
-                                      * it (a fluttering tape, a wire, a line of shadow or of changed
-                                      * light) is not the head */
 
 float dot2(const float a[2], float x, float y) { return a[0] * x + a[1] * y; }
 
@@ -248,71 +244,6 @@ float Detector::height_at(const Column &c, float x, float y)
     return z;
 }
 
-float Detector::solid_top(const std::vector<cv::Point> &pix, const Column &col, const cv::Rect &box,
-                          std::vector<uint8_t> &solid) const
-{
-    const float *up = col.up;
-    const int solid_px = col.valid ? std::min(32, (int)std::lround(kSolidTopM * col.px_per_m)) : 0;
-    float a_all = -1e30f;
-    solid.assign(pix.size(), 1);
-    for (const cv::Point &p : pix) {
-        a_all = std::max(a_all, dot2(up, (float)p.x, (float)p.y));
-    }
-    if (solid_px < 2) {
-        return a_all;
-    }
-    cv::Mat &m = roi_mask_;
-    m.create(box.height, box.width, CV_8U);
-    m.setTo(0);
-    for (const cv::Point &p : pix) {
-        m.at<uint8_t>(p.y - box.y, p.x - box.x) = 1;
-    }
-    int step[32][2]; /* the pixels 1..solid_px below, along -up */
-    for (int j = 0; j < solid_px; j++) {
-        step[j][0] = (int)std::lround(-up[0] * (float)(j + 1));
-        step[j][1] = (int)std::lround(-up[1] * (float)(j + 1));
-    }
-    /* the pixels near the top first (most blobs' top is solid): those within a metre of it, then
-     * the rest if none there is */
-    const float band = col.px_per_m;
-    float a_solid = -1e30f;
-    for (int pass = 0; pass < 2 && a_solid < -1e29f; pass++) {
-        for (size_t i = 0; i < pix.size(); i++) {
-            const float a = dot2(up, (float)pix[i].x, (float)pix[i].y);
-            if ((a >= a_all - band) != (pass == 0) || a <= a_solid) {
-                continue;
-            }
-            const int x = pix[i].x - box.x, y = pix[i].y - box.y;
-            uint8_t ok = 1;
-            for (int j = 0; j < solid_px && ok; j++) {
-                const int qx = x + step[j][0], qy = y + step[j][1];
-                ok = (uint8_t)(qx >= 0 && qy >= 0 && qx < m.cols && qy < m.rows && m.at<uint8_t>(qy, qx));
-            }
-            if (ok) {
-                a_solid = a;
-            }
-        }
-    }
-    if (a_solid < -1e29f) {
-        return a_all; /* no part that thick: the blob's own top */
-    }
-    /* the solid pixels at the top (measure averages them) */
-    for (size_t i = 0; i < pix.size(); i++) {
-        const float a = dot2(up, (float)pix[i].x, (float)pix[i].y);
-        if (a < a_solid - 1.0f) {
-            continue;
-        }
-        const int x = pix[i].x - box.x, y = pix[i].y - box.y;
-        uint8_t ok = 1;
-        for (int j = 0; j < solid_px && ok; j++) {
-            const int qx = x + step[j][0], qy = y + step[j][1];
-            ok = (uint8_t)(qx >= 0 && qy >= 0 && qx < m.cols && qy < m.rows && m.at<uint8_t>(qy, qx));
-        }
-        solid[i] = ok;
-    }
-    return a_solid;
-}
-
 void Detector::measure(const std::vector<cv::Point> &pix, const Column &col, const cv::Mat &hsv,
                        const cv::Rect &roi, Blob &b, bool *at_border) const
 {
@@ -328,17 +259,13 @@ void Detector::measure(const std::vector<cv::Point> &pix, const Column &col, con
         x1 = std::max(x1, p.x);
         y1 = std::max(y1, p.y);
     }
-    /* the head top: the mean of the extreme pixels along up among the solid ones (solid_top; a
-     * pixel is foreground when about half covered, so the edge lies a quarter pixel beyond the
-     * extreme pixels' centres on average) */
-    std::vector<uint8_t> &solid = solid_;
-    a_max = solid_top(pix, col, cv::Rect(x0, y0, x1 - x0 + 1, y1 - y0 + 1), solid);
+    /* the head top: the mean of the extreme pixels along up; a pixel is foreground when about half
+     * covered, so the edge lies a quarter pixel beyond the extreme pixels' centres on average */
     double sx = 0, sy = 0;
     int n_top = 0;
     *at_border = false;
-    for (size_t i = 0; i < pix.size(); i++) {
-        const cv::Point &p = pix[i];
-        if (solid[i] && dot2(up, (float)p.x, (float)p.y) >= a_max - 1.0f) {
+    for (const cv::Point &p : pix) {
+        if (dot2(up, (float)p.x, (float)p.y) >= a_max - 1.0f) {
             sx += p.x;
             sy += p.y;
             n_top++;
@@ -565,14 +492,10 @@ bool Detector::stacked_head(const std::vector<cv::Point> &seg, const Column &c, 
      * column's top) */
     const float a_foot = dot2(c.up, c.axis[0][0], c.axis[0][1]);
     const float vpm = c.height_px / (float)cfg_.person_height_m;
-    int x0 = 1 << 30, y0 = 1 << 30, x1 = -1, y1 = -1;
+    float a_top = -1e30f;
     for (const cv::Point &p : seg) {
-        x0 = std::min(x0, p.x);
-        y0 = std::min(y0, p.y);
-        x1 = std::max(x1, p.x);
-        y1 = std::max(y1, p.y);
+        a_top = std::max(a_top, dot2(c.up, (float)p.x, (float)p.y));
     }
-    const float a_top = solid_top(seg, c, cv::Rect(x0, y0, x1 - x0 + 1, y1 - y0 + 1), solid_);
     /* the bar is the body's far rim at that height, not its axis: a camera looking down steeply
      * sees the far side of one body's shoulders and head well above its axis */
     const double away[2] = {c.g[0] - (double)cam_.centre[0], c.g[1] - (double)cam_.centre[1]};

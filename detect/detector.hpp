@@ -140,10 +140,6 @@ class Detector {
     };
 
     bool stacked_head(const std::vector<cv::Point> &seg, const Column &c, Result &out);
-    /* The top of pix along up among its pixels with kSolidTopM of foreground below them (all of
-     * them flagged in solid when none has; box: pix's bounding box), in pixels along up. */
-    float solid_top(const std::vector<cv::Point> &pix, const Column &col, const cv::Rect &box,
-                    std::vector<uint8_t> &solid) const;
     bool ground_point(float xw, float yw, double g[3]) const;
     bool project_work(const double x[3], float p[2]) const;
     void local_up(float xw, float yw, float up[2]) const;
@@ -164,8 +160,6 @@ class Detector {
     std::vector<cv::Point> near_;    /* the nearer body's pixels of a blob that holds two (stacked_head) */
     std::vector<uint8_t> rows_;      /* rows of the nearer body's column that are foreground */
     cv::Mat open_kernel_, close_kernel_, mask_tmp_, mask_bgr_, mask_hsv_;
-    mutable cv::Mat roi_mask_;             /* measure: a blob's pixels in its box */
-    mutable std::vector<uint8_t> solid_;   /* measure: pixels with a solid body part below them */
     int wsmall_ = 0, hsmall_ = 0;
     int64_t frames_ = 0;
     std::vector<cv::Mat> boot_;      /* the first frames, for the median background */
