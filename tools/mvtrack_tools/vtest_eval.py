@@ -22,7 +22,11 @@ vtest_peers.py on the same frames. Every detector is scored the same way, frame 
 
 Each labelled head is matched to at most one detection within --radius px (Hungarian on the
 distance); recall is found / required heads, false blobs are the unmatched detections per frame,
-head error the median matched distance, time the median per frame (decoding excluded).
+head error the median matched distance, time the median per frame (decoding excluded). Each
+missed head is counted by why (the project detector's, printed; every detector's in --json):
+merged (a blob's box holds it and the blob's point is another required head: two people in one
+blob reporting one head), aside or below (a box holds it, its point more than --radius px to the
+side or above, or below), no blob (no box holds it).
 
     tools/mvtrack vtest [--truth gt|hand] [--peers [mog2 knn hog]] [--plot out/vtest.png]
                         [--image out/vtest_frame.png --frame 700] [--json] [--detect-args ARGS]
@@ -123,18 +127,42 @@ def peer_detections(kind: str, progress: bool) -> tuple[dict[int, list], float]:
     return out, float(np.median(ms)) if ms else float("nan")
 
 
-def score_frame(dets: list, heads: list, radius: float, gt: bool) -> tuple[int, int, int, list[float]]:
-    """(required heads, found, false blobs, matched errors) of one frame"""
+MISS_KINDS = ("merged", "aside", "below", "no_blob")
+
+
+def miss_kind(u: float, v: float, dets: list, pts: np.ndarray, req_pts: np.ndarray, me: int, radius: float) -> str:
+    """Why required head `me` at (u, v) was missed: merged (a blob's box holds it and the blob's point
+    is another required head's), aside (a box holds it, its point more than `radius` away to the side
+    or above), below (... below), no_blob (no box holds it)."""
+    holders = [i for i, d in enumerate(dets) if d[2][0] <= u <= d[2][2] and d[2][1] - radius <= v <= d[2][3]]
+    if not holders:
+        return "no_blob"
+    others = np.delete(req_pts, me, axis=0)
+    for i in holders:
+        if len(others) and (np.hypot(*(others - pts[i]).T) <= radius).any():
+            return "merged"
+    i = min(holders, key=lambda i: float(np.hypot(pts[i, 0] - u, pts[i, 1] - v)))
+    return "below" if pts[i, 1] - v > radius and abs(pts[i, 0] - u) <= pts[i, 1] - v else "aside"
+
+
+def score_frame(dets: list, heads: list, radius: float, gt: bool) -> tuple[int, int, int, list[float], dict]:
+    """(required heads, found, false blobs, matched errors, misses by kind) of one frame"""
     req = [(u, v) for u, v, _, r in heads if r]
     pts = np.array([[d[0], d[1]] for d in dets], float).reshape(-1, 2)
     used = np.zeros(len(pts), bool)
     errs: list[float] = []
+    found = np.zeros(len(req), bool)
     if req and len(pts):
         cost = np.linalg.norm(np.array(req, float)[:, None, :] - pts[None, :, :], axis=2)
         r, c = linear_sum_assignment(np.where(cost <= radius, cost, 1e6))
         ok = cost[r, c] <= radius
         used[c[ok]] = True
+        found[r[ok]] = True
         errs = list(cost[r, c][ok])
+    req_pts = np.array(req, float).reshape(-1, 2)
+    misses = dict.fromkeys(MISS_KINDS, 0)
+    for k in np.flatnonzero(~found):
+        misses[miss_kind(req[k][0], req[k][1], dets, pts, req_pts, int(k), radius)] += 1
     false = 0
     for i, d in enumerate(dets):
         if used[i]:
@@ -146,7 +174,7 @@ def score_frame(dets: list, heads: list, radius: float, gt: bool) -> tuple[int, 
                for _, _, b, r in heads):
             continue
         false += 1
-    return len(req), len(errs), false, errs
+    return len(req), len(errs), false, errs, misses
 
 
 def score(dets: dict[int, list], truth: dict[int, list], frames: list[int], radius: float, gt: bool) -> dict:
@@ -163,7 +191,8 @@ def summary(per: dict, frames: list[int]) -> dict:
     errs = [e for f in frames for e in per[f][3]]
     return {"frames": len(frames), "people": req, "found": found, "recall": found / max(req, 1),
             "false_blobs_per_frame": false / max(len(frames), 1),
-            "head_error_px_median": float(np.median(errs)) if errs else float("nan")}
+            "head_error_px_median": float(np.median(errs)) if errs else float("nan"),
+            "misses": {k: sum(per[f][4][k] for f in frames) for k in MISS_KINDS}}
 
 
 def plot(path: Path, runs: dict[str, dict], frames: list[int]) -> None:
@@ -284,6 +313,11 @@ def main(argv: list[str] | None = None) -> int:
             s = r[k]
             print(f"{name:18s} {k:>9s} {s['recall']:7.3f} {s['false_blobs_per_frame']:11.2f} "
                   f"{s['head_error_px_median']:11.1f} {r['ms_per_frame']:9.2f}")
+    print("mvtrack-detect's misses: " + "; ".join(
+        f"{k} " + ", ".join(f"{n} {kind.replace('_', ' ')}" for kind, n in result["detectors"]["mvtrack-detect"][k]["misses"].items())
+        for k in parts))
+    print("(merged: in a blob whose point is another person's head; aside / below: in a blob whose point lies "
+          f"more than {a.radius:g} px to the side or above / below; no blob: in no blob's box)")
     if a.plot and gt:
         print(f"plot: {a.plot}")
     return 0
