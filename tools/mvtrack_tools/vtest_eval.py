@@ -313,9 +313,9 @@ def main(argv: list[str] | None = None) -> int:
             s = r[k]
             print(f"{name:18s} {k:>9s} {s['recall']:7.3f} {s['false_blobs_per_frame']:11.2f} "
                   f"{s['head_error_px_median']:11.1f} {r['ms_per_frame']:9.2f}")
+    ours = result["detectors"]["mvtrack-detect"]
     print("mvtrack-detect's misses: " + "; ".join(
-        f"{k} " + ", ".join(f"{n} {kind.replace('_', ' ')}" for kind, n in result["detectors"]["mvtrack-detect"][k]["misses"].items())
-        for k in parts))
+        f"{k} " + ", ".join(f"{n} {kind.replace('_', ' ')}" for kind, n in ours[k]["misses"].items()) for k in parts))
     print("(merged: in a blob whose point is another person's head; aside / below: in a blob whose point lies "
           f"more than {a.radius:g} px to the side or above / below; no blob: in no blob's box)")
     if a.plot and gt:
