@@ -132,8 +132,9 @@ MISS_KINDS = ("merged", "aside", "below", "no_blob")
 
 def miss_kind(u: float, v: float, dets: list, pts: np.ndarray, req_pts: np.ndarray, me: int, radius: float) -> str:
     """Why required head `me` at (u, v) was missed: merged (a blob's box holds it and the blob's point
-    is another required head's), aside (a box holds it, its point more than `radius` away to the side
-    or above), below (... below), no_blob (no box holds it)."""
+    is another required head's), below (a box holds it, its point more than `radius` below the head
+    and further below than aside), aside (a box holds it, its point elsewhere more than `radius` away),
+    no_blob (no box holds it)."""
     holders = [i for i, d in enumerate(dets) if d[2][0] <= u <= d[2][2] and d[2][1] - radius <= v <= d[2][3]]
     if not holders:
         return "no_blob"
@@ -148,18 +149,18 @@ def miss_kind(u: float, v: float, dets: list, pts: np.ndarray, req_pts: np.ndarr
 def score_frame(dets: list, heads: list, radius: float, gt: bool) -> tuple[int, int, int, list[float], dict]:
     """(required heads, found, false blobs, matched errors, misses by kind) of one frame"""
     req = [(u, v) for u, v, _, r in heads if r]
+    req_pts = np.array(req, float).reshape(-1, 2)
     pts = np.array([[d[0], d[1]] for d in dets], float).reshape(-1, 2)
     used = np.zeros(len(pts), bool)
     errs: list[float] = []
     found = np.zeros(len(req), bool)
     if req and len(pts):
-        cost = np.linalg.norm(np.array(req, float)[:, None, :] - pts[None, :, :], axis=2)
+        cost = np.linalg.norm(req_pts[:, None, :] - pts[None, :, :], axis=2)
         r, c = linear_sum_assignment(np.where(cost <= radius, cost, 1e6))
         ok = cost[r, c] <= radius
         used[c[ok]] = True
         found[r[ok]] = True
         errs = list(cost[r, c][ok])
-    req_pts = np.array(req, float).reshape(-1, 2)
     misses = dict.fromkeys(MISS_KINDS, 0)
     for k in np.flatnonzero(~found):
         misses[miss_kind(req[k][0], req[k][1], dets, pts, req_pts, int(k), radius)] += 1
