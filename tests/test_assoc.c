@@ -32,21 +32,21 @@ static double brute(const mvt_real *c, int nr, int nc, int r, unsigned used, dou
     return best;
 }
 
-static void test_mvt_assoc_solve_random_matrices_match_brute_force(void **state)
+/* Random nr x nc matrices with a share `forbid` of forbidden entries, nr <= max_rows: the solver's
+ * choice is distinct feasible columns whose cost equals the exhaustive optimum among assignments
+ * that leave the fewest rows unassigned. */
+static void check_random(uint32_t seed, int trials, int max_rows, int max_extra_cols, double forbid)
 {
-    (void)state;
-    test_rng_t rng = {12345};
-    for (int trial = 0; trial < 400; trial++) {
-        const int nr = 1 + (int)(test_uniform(&rng) * 5);
-        const int nc = nr + (int)(test_uniform(&rng) * 4);
-        mvt_real c[6 * 9];
+    test_rng_t rng = {seed};
+    for (int trial = 0; trial < trials; trial++) {
+        const int nr = 1 + (int)(test_uniform(&rng) * max_rows);
+        const int nc = nr + (int)(test_uniform(&rng) * (max_extra_cols + 1));
+        mvt_real c[8 * 12];
         for (int i = 0; i < nr * nc; i++) {
-            c[i] = test_uniform(&rng) < 0.3 ? -1.0f : (mvt_real)(test_uniform(&rng) * 20.0);
+            c[i] = test_uniform(&rng) < forbid ? -1.0f : (mvt_real)(test_uniform(&rng) * 20.0);
         }
-        int a[6];
+        int a[8];
         assert_int_equal(mvt_assoc_solve(c, nr, nc, nc, a, &g_ws), MVT_OK);
-        /* the solver's choice: distinct feasible columns; its cost equals the exhaustive optimum
-         * among assignments that leave the fewest rows unassigned */
         double cost = 0.0;
         int unassigned = 0;
         unsigned used = 0;
@@ -65,6 +65,20 @@ static void test_mvt_assoc_solve_random_matrices_match_brute_force(void **state)
         const double ref = brute(c, nr, nc, 0, 0, penalty);
         assert_float_equal(cost + penalty * unassigned, ref, 1e-3);
     }
+}
+
+static void test_mvt_assoc_solve_random_matrices_match_brute_force(void **state)
+{
+    (void)state;
+    check_random(12345, 400, 5, 3, 0.3);
+}
+
+/* Mostly forbidden entries: rows fall into groups linked through shared columns, some groups with
+ * more rows than feasible columns. */
+static void test_mvt_assoc_solve_sparse_groups_match_brute_force(void **state)
+{
+    (void)state;
+    check_random(777, 300, 8, 4, 0.8);
 }
 
 static void test_mvt_assoc_solve_greedy_trap_global_optimum(void **state)
@@ -115,6 +129,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_mvt_assoc_solve_random_matrices_match_brute_force),
+        cmocka_unit_test(test_mvt_assoc_solve_sparse_groups_match_brute_force),
         cmocka_unit_test(test_mvt_assoc_solve_greedy_trap_global_optimum),
         cmocka_unit_test(test_mvt_assoc_solve_bad_sizes_invalid),
         cmocka_unit_test(test_mvt_assoc_solve_full_capacity_identity),

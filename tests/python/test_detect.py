@@ -155,6 +155,26 @@ def test_vtest_whole_sequence_against_the_public_ground_truth():
     assert r["20-794"]["recall"] >= 0.90 and r["20-794"]["false_blobs_per_frame"] <= 0.38, r["20-794"]
 
 
+def test_vtest_miss_kinds():
+    """Each missed head's kind, on made-up blobs: a point on the annotated box's top edge but off its
+    centre, a point beside the box, another person's head, a point far below, no blob."""
+    from mvtrack_tools import vtest_eval
+
+    box = (80.0, 50.0, 130.0, 200.0)  # annotated box; its top-centre (105, 50) is the head
+
+    def kind(u, v, blob_box, others=()):
+        dets = [(u, v, blob_box)]
+        pts = np.array([[u, v]], float)
+        req = np.array([[105.0, 50.0], *others], float)
+        return vtest_eval.miss_kind(105.0, 50.0, dets, pts, req, 0, 15.0, box)
+
+    assert kind(86.0, 53.0, (70.0, 45.0, 130.0, 200.0)) == "off_centre"
+    assert kind(70.0, 40.0, (60.0, 35.0, 130.0, 200.0)) == "aside"  # beside the annotated box
+    assert kind(86.0, 53.0, (70.0, 45.0, 130.0, 200.0), [(88.0, 52.0)]) == "merged"
+    assert kind(105.0, 90.0, (80.0, 45.0, 130.0, 200.0)) == "below"
+    assert kind(300.0, 50.0, (290.0, 45.0, 320.0, 200.0)) == "no_blob"
+
+
 def test_vtest_in_3d_with_one_camera(tmp_path):
     """vtest.avi through mvtrack-detect and mvtrackd with its one camera, scored on
     the ground plane at 1 m against the PETS 2009 S2.L1 annotation (where the project's reference

@@ -25,8 +25,11 @@ distance); recall is found / required heads, false blobs are the unmatched detec
 head error the median matched distance, time the median per frame (decoding excluded). Each
 missed head is counted by why (the project detector's, printed; every detector's in --json):
 merged (a blob's box holds it and the blob's point is another required head: two people in one
-blob reporting one head), aside or below (a box holds it, its point more than --radius px to the
-side or above, or below), no blob (no box holds it).
+blob reporting one head), off centre (a box holds it and its point lies on the top edge of the
+annotated box, within --radius px of its height and inside its width, but more than --radius px
+from the centre: a stride or an arm widens the annotated box to one side of the head, so its
+top-centre is not the head), aside or below (a box holds it, its point elsewhere more than
+--radius px to the side or above, or below), no blob (no box holds it).
 
     tools/mvtrack vtest [--truth gt|hand] [--peers [mog2 knn hog]] [--plot out/vtest.png]
                         [--image out/vtest_frame.png --frame 700] [--json] [--detect-args ARGS]
@@ -127,14 +130,16 @@ def peer_detections(kind: str, progress: bool) -> tuple[dict[int, list], float]:
     return out, float(np.median(ms)) if ms else float("nan")
 
 
-MISS_KINDS = ("merged", "aside", "below", "no_blob")
+MISS_KINDS = ("merged", "off_centre", "aside", "below", "no_blob")
 
 
-def miss_kind(u: float, v: float, dets: list, pts: np.ndarray, req_pts: np.ndarray, me: int, radius: float) -> str:
+def miss_kind(u: float, v: float, dets: list, pts: np.ndarray, req_pts: np.ndarray, me: int, radius: float,
+              box: tuple | None = None) -> str:
     """Why required head `me` at (u, v) was missed: merged (a blob's box holds it and the blob's point
-    is another required head's), below (a box holds it, its point more than `radius` below the head
-    and further below than aside), aside (a box holds it, its point elsewhere more than `radius` away),
-    no_blob (no box holds it)."""
+    is another required head's), off_centre (a box holds it, its point on the top edge of the
+    annotated `box`: within `radius` of its height and inside its width), below (a box holds it, its
+    point more than `radius` below the head and further below than aside), aside (a box holds it,
+    its point elsewhere more than `radius` away), no_blob (no box holds it)."""
     holders = [i for i, d in enumerate(dets) if d[2][0] <= u <= d[2][2] and d[2][1] - radius <= v <= d[2][3]]
     if not holders:
         return "no_blob"
@@ -143,12 +148,15 @@ def miss_kind(u: float, v: float, dets: list, pts: np.ndarray, req_pts: np.ndarr
         if len(others) and (np.hypot(*(others - pts[i]).T) <= radius).any():
             return "merged"
     i = min(holders, key=lambda i: float(np.hypot(pts[i, 0] - u, pts[i, 1] - v)))
+    if box is not None and box[0] <= pts[i, 0] <= box[2] and abs(pts[i, 1] - v) <= radius:
+        return "off_centre"
     return "below" if pts[i, 1] - v > radius and abs(pts[i, 0] - u) <= pts[i, 1] - v else "aside"
 
 
 def score_frame(dets: list, heads: list, radius: float, gt: bool) -> tuple[int, int, int, list[float], dict]:
     """(required heads, found, false blobs, matched errors, misses by kind) of one frame"""
     req = [(u, v) for u, v, _, r in heads if r]
+    req_box = [b for _, _, b, r in heads if r]
     req_pts = np.array(req, float).reshape(-1, 2)
     pts = np.array([[d[0], d[1]] for d in dets], float).reshape(-1, 2)
     used = np.zeros(len(pts), bool)
@@ -163,7 +171,7 @@ def score_frame(dets: list, heads: list, radius: float, gt: bool) -> tuple[int, 
         errs = list(cost[r, c][ok])
     misses = dict.fromkeys(MISS_KINDS, 0)
     for k in np.flatnonzero(~found):
-        misses[miss_kind(req[k][0], req[k][1], dets, pts, req_pts, int(k), radius)] += 1
+        misses[miss_kind(req[k][0], req[k][1], dets, pts, req_pts, int(k), radius, req_box[k])] += 1
     false = 0
     for i, d in enumerate(dets):
         if used[i]:
@@ -317,8 +325,9 @@ def main(argv: list[str] | None = None) -> int:
     ours = result["detectors"]["mvtrack-detect"]
     print("mvtrack-detect's misses: " + "; ".join(
         f"{k} " + ", ".join(f"{n} {kind.replace('_', ' ')}" for kind, n in ours[k]["misses"].items()) for k in parts))
-    print("(merged: in a blob whose point is another person's head; aside / below: in a blob whose point lies "
-          f"more than {a.radius:g} px to the side or above / below; no blob: in no blob's box)")
+    print("(merged: in a blob whose point is another person's head; off centre: in a blob whose point lies on the "
+          f"annotated box's top edge, more than {a.radius:g} px from its centre; aside / below: in a blob whose point "
+          f"lies more than {a.radius:g} px to the side or above / below; no blob: in no blob's box)")
     if a.plot and gt:
         print(f"plot: {a.plot}")
     return 0
