@@ -791,6 +791,10 @@ def plot(rig: Rig, grid: np.ndarray, n_seen: np.ndarray, seen: np.ndarray, path:
 # ---- command line ---------------------------------------------------------------------------------
 
 def main(argv: list[str] | None = None) -> int:
+    # One thread: OpenCV's parallel sums change with the threads' timing, and a wide lens's fit
+    # (8 coefficients, ill-conditioned toward the picture's corners) then lands on a different
+    # solution from run to run; the same views must give the same lens.
+    cv2.setNumThreads(1)
     ap = argparse.ArgumentParser(prog="mvtrack calibrate", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="cmd", required=True)
