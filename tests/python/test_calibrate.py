@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from mvtrack_tools.board_render import pose_in_front, render
-from mvtrack_tools.calibrate import Board
+from mvtrack_tools.calibrate import Board, find_boards
 from mvtrack_tools.rig import Rig, intrinsics, look_at, normalise, smartroom
 
 REPO = Path(__file__).resolve().parents[2]
@@ -81,12 +81,8 @@ def picture_error(true_cam, K: np.ndarray, dist: np.ndarray, hull: np.ndarray | 
 
 
 def corners_of(board: Board, folder: Path) -> np.ndarray:
-    pts = []
-    for f in sorted(folder.glob("*.png")):
-        d = board.detect(cv2.imread(str(f), cv2.IMREAD_GRAYSCALE))
-        if d is not None:
-            pts.append(d[0])
-    return np.vstack(pts)
+    frames = [cv2.imread(str(f), cv2.IMREAD_GRAYSCALE) for f in sorted(folder.glob("*.png"))]
+    return np.vstack([d[0] for d in find_boards(board, frames) if d is not None])
 
 
 def board_views(cam, board: Board, size_m, out: Path, rng) -> None:

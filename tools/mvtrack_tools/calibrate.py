@@ -51,6 +51,7 @@ import json
 import os
 import sys
 import tempfile
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import cv2
@@ -82,7 +83,6 @@ class Board:
                 name = parts[4] if len(parts) == 5 else "DICT_4X4_50"
                 self.dictionary = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, name))
                 self.board = cv2.aruco.CharucoBoard((cols, rows), self.square, self.marker, self.dictionary)
-                self.detector = cv2.aruco.CharucoDetector(self.board)
             else:
                 raise ValueError
         except (ValueError, IndexError, AttributeError, cv2.error):
@@ -106,7 +106,8 @@ class Board:
                 return None
             img, obj = corners.reshape(-1, 2).astype(np.float32), self.object_points()
         else:
-            corners, ids, _, _ = self.detector.detectBoard(gray)
+            # a detector a call: detect runs on several threads at once (find_boards)
+            corners, ids, _, _ = cv2.aruco.CharucoDetector(self.board).detectBoard(gray)
             if ids is None or len(ids) < 6:
                 return None
             img, obj = corners.reshape(-1, 2).astype(np.float32), self.object_points()[ids.ravel()]
@@ -114,6 +115,13 @@ class Board:
         # little under the white margin between the corner and the nearest marker
         reach = 0.4 if self.kind == "chessboard" else min(0.4, 0.9 * (self.square - self.marker) / (2 * self.square))
         return refine_corners(gray, img, obj, self.square, reach), obj
+
+
+def find_boards(board: Board, frames: list[np.ndarray]) -> list[tuple[np.ndarray, np.ndarray] | None]:
+    """board.detect on every frame, the frames spread over the machine's cores: OpenCV lets go of
+    Python's lock while it searches, and a frame's corners do not depend on the other frames."""
+    with ThreadPoolExecutor(max_workers=max(1, min(len(frames), os.cpu_count() or 1))) as pool:
+        return list(pool.map(board.detect, frames))
 
 
 def refine_corners(gray: np.ndarray, img: np.ndarray, obj: np.ndarray, square: float, reach: float) -> np.ndarray:
@@ -258,8 +266,7 @@ def intrinsics(a) -> dict:
     frames = read_frames(a.images, a.video, a.every)
     h, w = frames[0].shape
     found = []
-    for i, f in enumerate(frames):
-        d = board.detect(f)
+    for i, (f, d) in enumerate(zip(frames, find_boards(board, frames))):
         if d is not None:
             found.append({"index": i, "img": d[0], "obj": d[1], "sharp": sharpness(f, d[0])})
     if not found:

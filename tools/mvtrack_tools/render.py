@@ -86,6 +86,26 @@ def _rays(cam: Camera, scale: int) -> np.ndarray:
     return d.reshape(hm, wm, 3)
 
 
+# points over a person's bounding cylinder, as (cos, sin, height / h): 24 bearings at 9 heights
+_RIM = np.array([(np.cos(a), np.sin(a), z) for a in np.linspace(0, 2 * np.pi, 24, endpoint=False)
+                 for z in np.linspace(0, 1, 9)])
+
+
+def _footprint_margin(cam: Camera, D: np.ndarray, scale: int) -> int | None:
+    """Mask pixels to widen a projected footprint by in this camera: two, plus how far (in mask
+    pixels) a mask pixel's ray projects from that pixel's centre (the fixed-point inverse lens
+    leaves the corners of a strong lens off). None when that is over two mask pixels anywhere or a
+    ray is outside the lens's field: then every person is cast over the whole picture."""
+    hm, wm = D.shape[:2]
+    uv = cam.project(cam.centre + D.reshape(-1, 3))
+    if not np.isfinite(uv).all():
+        return None
+    jj, ii = np.meshgrid(np.arange(wm), np.arange(hm))
+    centre = np.column_stack([jj.ravel(), ii.ravel()]) * scale + (scale - 1) / 2.0
+    err = float(np.abs(uv - centre).max()) / scale
+    return None if err > 2.0 else 2 + int(np.ceil(err))
+
+
 def _hit_cylinder(C, D, cx, cy, r, z0, z1) -> np.ndarray:
     """Ray parameter of the first hit on a vertical cylinder (side or top cap), inf if none."""
     ox, oy = C[0] - cx, C[1] - cy
@@ -162,9 +182,15 @@ class Renderer:
         rng = np.random.default_rng(seed + 7919)
         self.rays, self.centres, self.static_t, self.bg_h, self.bg_s = [], [], [], [], []
         self.cut_rows: list[np.ndarray] = []
+        self.margin: list[int | None] = []
+        self.floor: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
         for cam in rig.cameras:
             D = _rays(cam, self.m.scale)
             C = cam.centre
+            self.margin.append(_footprint_margin(cam, D, self.m.scale))
+            with np.errstate(divide="ignore", invalid="ignore"):  # where each ray meets the floor
+                tf = -C[2] / D[..., 2]
+            self.floor.append((tf, C[0] + tf * D[..., 0], C[1] + tf * D[..., 1]))
             t = np.full(D.shape[:-1], np.inf)
             for b in self.furniture:
                 t = np.minimum(t, _hit_box(C, D, b))
@@ -183,6 +209,25 @@ class Renderer:
                 band[r0:r0 + int(rng.integers(1, 3))] = True
             self.cut_rows.append(band)
 
+    def footprint(self, k: int, x: float, y: float, h: float) -> tuple[slice, slice]:
+        """The mask pixels a person (head top at x, y, h) can cover in camera k: the picture box
+        around points over their bounding cylinder (the torso's radius, floor to head), widened by
+        the camera's margin; the whole picture when the camera's rays cannot be trusted to a
+        projection (margin None) or part of the person is outside its field (behind it)."""
+        hm, wm = self.rays[k].shape[:2]
+        whole = (slice(0, hm), slice(0, wm))
+        if self.margin[k] is None:
+            return whole
+        uv = self.rig.cameras[k].project(np.column_stack([x + TORSO_R * _RIM[:, 0], y + TORSO_R * _RIM[:, 1],
+                                                          h * _RIM[:, 2]]))
+        if not np.isfinite(uv).all():
+            return whole
+        s, mg = self.m.scale, self.margin[k]
+        # mask pixel j covers picture pixels j s .. j s + s - 1 (its centre j s + (s - 1) / 2)
+        c0, c1 = int(np.floor(uv[:, 0].min() / s)) - mg, int(np.floor(uv[:, 0].max() / s)) + mg + 1
+        r0, r1 = int(np.floor(uv[:, 1].min() / s)) - mg, int(np.floor(uv[:, 1].max() / s)) + mg + 1
+        return slice(max(r0, 0), max(min(r1, hm), 0)), slice(max(c0, 0), max(min(c1, wm), 0))
+
     def render(self, k: int, people: list[tuple[int, np.ndarray, int]], rng: np.random.Generator) -> CameraView:
         """people: (gid, head-top position, palette index). One camera's mask, colour and blobs."""
         m = self.m
@@ -193,18 +238,23 @@ class Renderer:
         hue = self.bg_h[k].copy()
         sat = self.bg_s[k].copy()
         fg = np.zeros((hm, wm), bool)
+        boxes = {}
         for gid, head, pal in people:
             x, y, h = (float(v) for v in head)
             shirt, trousers = PALETTE[pal % len(PALETTE)]
-            parts = [(_hit_sphere(C, D, np.array([x, y, h - HEAD_R]), HEAD_R), SKIN),
-                     (_hit_cylinder(C, D, x, y, TORSO_R, 0.52 * h, h - 0.22), shirt),
-                     (_hit_cylinder(C, D, x, y, LEGS_R, 0.0, 0.52 * h), trousers)]
+            # the rays of the person's footprint only: every ray outside it misses them
+            box = boxes[gid] = self.footprint(k, x, y, h)
+            Db = D[box]
+            parts = [(_hit_sphere(C, Db, np.array([x, y, h - HEAD_R]), HEAD_R), SKIN),
+                     (_hit_cylinder(C, Db, x, y, TORSO_R, 0.52 * h, h - 0.22), shirt),
+                     (_hit_cylinder(C, Db, x, y, LEGS_R, 0.0, 0.52 * h), trousers)]
+            zb, lb, hb, sb = zbuf[box], label[box], hue[box], sat[box]  # views: written through
             for t, (ph, ps) in parts:
-                near = t < zbuf
-                zbuf[near] = t[near]
-                label[near] = gid
-                hue[near] = ph
-                sat[near] = ps
+                near = t < zb
+                zb[near] = t[near]
+                lb[near] = gid
+                hb[near] = ph
+                sb[near] = ps
         body = label > 0
         if m.fragments == "camouflage":
             # per person (by identity, so it lasts): 0 nothing, 1 trousers, 2 shirt like the background
@@ -213,16 +263,16 @@ class Renderer:
                 if which:
                     h = float(head[2])
                     lo, hi = (0.0, 0.52 * h) if which == 1 else (0.52 * h, h - 0.22)
-                    t = _hit_cylinder(C, D, float(head[0]), float(head[1]), TORSO_R if which == 2 else LEGS_R, lo, hi)
+                    box = boxes[gid]
+                    t = _hit_cylinder(C, D[box], float(head[0]), float(head[1]), TORSO_R if which == 2 else LEGS_R,
+                                      lo, hi)
                     with np.errstate(invalid="ignore"):  # no hit on either (inf - inf): not this part
-                        body &= ~((label == gid) & (np.abs(t - zbuf) < 1e-6))
+                        body[box] &= ~((label[box] == gid) & (np.abs(t - zbuf[box]) < 1e-6))
         if m.fragments == "rows":
             body &= ~self.cut_rows[k][:, None]
         fg |= body
         if m.shadow:  # floor patch beside the feet, unsaturated, where nothing nearer is drawn
-            with np.errstate(divide="ignore", invalid="ignore"):
-                tf = -C[2] / D[..., 2]
-            fx, fy = C[0] + tf * D[..., 0], C[1] + tf * D[..., 1]
+            tf, fx, fy = self.floor[k]
             for gid, head, _ in people:
                 sx, sy = head[0] + 0.25, head[1] + 0.15
                 sh = (tf > 0) & (tf < zbuf) & (((fx - sx) / 0.35) ** 2 + ((fy - sy) / 0.25) ** 2 <= 1.0)

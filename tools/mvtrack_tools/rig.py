@@ -54,11 +54,23 @@ def normalise(K: np.ndarray, dist, pix: np.ndarray, iters: int = 12) -> tuple[np
     ty = (pix[:, 1] - K[1, 2]) / K[1, 1]
     x, y = xn[:, 0].copy(), xn[:, 1].copy()
     h = 1e-6
+    # a pixel leaves the iteration once it is met to 1e-9 px (Newton's next step would not move it
+    # measurably): most are after one or two steps, and only those left cost the next one
+    tol2 = (1e-9 / max(K[0, 0], K[1, 1])) ** 2
+    live = np.arange(len(x))
     for _ in range(iters):
-        fx, fy = _distort(d, x, y)
-        ex, ey = fx - tx, fy - ty
-        ax, ay = _distort(d, x + h, y)
-        bx, by = _distort(d, x, y + h)
+        xa, ya, txa, tya = x[live], y[live], tx[live], ty[live]
+        fx, fy = _distort(d, xa, ya)
+        ex, ey = fx - txa, fy - tya
+        e0 = ex * ex + ey * ey
+        keep = e0 > tol2
+        if not keep.all():
+            live, xa, ya, txa, tya, fx, fy, ex, ey, e0 = (
+                a[keep] for a in (live, xa, ya, txa, tya, fx, fy, ex, ey, e0))
+        if live.size == 0:
+            break
+        ax, ay = _distort(d, xa + h, ya)
+        bx, by = _distort(d, xa, ya + h)
         j11, j21 = (ax - fx) / h, (ay - fy) / h
         j12, j22 = (bx - fx) / h, (by - fy) / h
         det = j11 * j22 - j12 * j21
@@ -66,14 +78,13 @@ def normalise(K: np.ndarray, dist, pix: np.ndarray, iters: int = 12) -> tuple[np
         det = np.where(ok, det, 1.0)
         sx = np.where(ok, (j22 * ex - j12 * ey) / det, 0.0)
         sy = np.where(ok, (j11 * ey - j21 * ex) / det, 0.0)
-        e0 = ex * ex + ey * ey
-        step = np.zeros_like(x)
+        step = np.zeros_like(xa)
         for t in (1.0, 0.5, 0.25, 0.125):  # the longest step that lowers the error
-            gx, gy = _distort(d, x - t * sx, y - t * sy)
-            better = (step == 0) & ((gx - tx) ** 2 + (gy - ty) ** 2 < e0)
+            gx, gy = _distort(d, xa - t * sx, ya - t * sy)
+            better = (step == 0) & ((gx - txa) ** 2 + (gy - tya) ** 2 < e0)
             step[better] = t
-        x -= step * sx
-        y -= step * sy
+        x[live] = xa - step * sx
+        y[live] = ya - step * sy
     fx, fy = _distort(d, x, y)
     has_ray = np.hypot((fx - tx) * K[0, 0], (fy - ty) * K[1, 1]) < 1e-3
     return np.stack([x, y], axis=1), has_ray
