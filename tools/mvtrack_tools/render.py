@@ -5,7 +5,8 @@ Each person is three solids under the head-top point (x, y, h): a head sphere (r
 a torso cylinder (radius 0.19 m, from 0.52 h to h - 0.22 m, shoulders as its top cap) and a legs
 cylinder (radius 0.14 m, floor to 0.52 h), coloured skin / shirt / trousers. Static furniture
 (boxes) stands in the room. Per camera the renderer casts one ray per mask pixel (through
-OpenCV's lens model, cv2.undistortPoints) and keeps the nearest hit.
+OpenCV's lens model, cv2.undistortPoints) and keeps the nearest hit; a person's solids are
+tested only on the rays of their footprint (Renderer.footprint), where every hit on them lies.
 
 The motion-segmentation mask is what a background subtractor gives, not the true silhouette:
 - furniture in front of a person hides them (it is static: never foreground);
