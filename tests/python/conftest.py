@@ -16,6 +16,7 @@ def pytest_configure(config):
     config.addinivalue_line("markers", "detect: runs build/bin/mvtrack-detect on video")
     config.addinivalue_line("markers", "accuracy: detect tests that measure accuracy (not run under ASan)")
     config.addinivalue_line("markers", "browser: tools/mvtrack view in headless Chromium")
+    config.addinivalue_line("markers", "tools: the tools alone, without a daemon or a detector")
 
 
 @pytest.fixture

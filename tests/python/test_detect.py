@@ -150,14 +150,16 @@ def test_vtest_whole_sequence_against_the_public_ground_truth():
     for part in ("20-399", "400-794"):
         assert r[part]["recall"] >= 0.88, (part, r[part])
         assert r[part]["false_blobs_per_frame"] <= 0.4, (part, r[part])
-    for part in ("20-794", "20-399", "400-794"):  # every miss counted once, by why
+    for part in ("20-794", "20-399", "400-794"):  # every miss counted once, by why and by the mask
         assert sum(r[part]["misses"].values()) == r[part]["people"] - r[part]["found"], (part, r[part])
+        assert sum(r[part]["misses_by_mask"].values()) == r[part]["people"] - r[part]["found"], (part, r[part])
     assert r["20-794"]["recall"] >= 0.90 and r["20-794"]["false_blobs_per_frame"] <= 0.38, r["20-794"]
 
 
 def test_vtest_miss_kinds():
     """Each missed head's kind, on made-up blobs: a point on the annotated box's top edge but off its
-    centre, a point beside the box, another person's head, a point far below, no blob."""
+    centre, a point beside the box, another person's head, a point far below, no blob; and what a
+    made-up mask shows at the head: a top on its outline, a region above it, nothing."""
     from mvtrack_tools import vtest_eval
 
     box = (80.0, 50.0, 130.0, 200.0)  # annotated box; its top-centre (105, 50) is the head
@@ -173,6 +175,15 @@ def test_vtest_miss_kinds():
     assert kind(86.0, 53.0, (70.0, 45.0, 130.0, 200.0), [(88.0, 52.0)]) == "merged"
     assert kind(105.0, 90.0, (80.0, 45.0, 130.0, 200.0)) == "below"
     assert kind(300.0, 50.0, (290.0, 45.0, 320.0, 200.0)) == "no_blob"
+
+    # what the mask shows at the head (105, 50): a 160-px-wide picture, 4 px mask pixels; the box is
+    # 150 px tall, so a head's window is 150 / 8 px, 5 mask pixels
+    mask = np.zeros((60, 40), np.uint8)
+    mask[13:50, 24:29] = 1  # a body whose top row (52 px) is just under the head top's row (48 px)
+    assert vtest_eval.mask_evidence(mask, 160, 105.0, 50.0, box) == "outline"
+    mask[5:13, 24:29] = 1  # a region above the head: no edge there
+    assert vtest_eval.mask_evidence(mask, 160, 105.0, 50.0, box) == "interior"
+    assert vtest_eval.mask_evidence(mask, 160, 150.0, 50.0, box) == "no_head"
 
 
 def test_vtest_in_3d_with_one_camera(tmp_path):

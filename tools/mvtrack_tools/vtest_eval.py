@@ -29,7 +29,13 @@ blob reporting one head), off centre (a box holds it and its point lies on the t
 annotated box, within --radius px of its height and inside its width, but more than --radius px
 from the centre: a stride or an arm widens the annotated box to one side of the head, so its
 top-centre is not the head), aside or below (a box holds it, its point elsewhere more than
---radius px to the side or above, or below), no blob (no box holds it).
+--radius px to the side or above, or below), no blob (no box holds it). The project detector's
+misses are also counted by what its own mask shows at the head (--json, misses_by_mask): outline
+(foreground at the head, mostly background for a head's height above it: a top a reading of the
+mask's outline could find), interior (foreground above it too: the head lies inside a region, where
+a binary mask has no edge), no head (the head's window is mostly background: the segmentation lost
+it); the windows are 3 mask pixels wide, a head's height (an eighth of the annotated box, at least
+a mask pixel) tall, just above and just below the annotated top.
 
     tools/mvtrack vtest [--truth gt|hand] [--peers [mog2 knn hog]] [--plot out/vtest.png]
                         [--image out/vtest_frame.png --frame 700] [--json] [--detect-args ARGS]
@@ -56,6 +62,7 @@ VTEST = Path("/usr/share/doc/opencv-doc/examples/data/vtest.avi")
 LABELS = REPO / "tests/data/vtest_labels.json"
 GT_JSON = REPO.parent / "shared" / "data" / "vtest_gt.json"
 RIG = REPO / "tests/data/vtest_rig.yaml"
+WIDTH = 768  # vtest.avi's picture, px
 FIRST = 20     # frames 0..FIRST-1: the background's start-up, not scored
 SPLIT = 400    # frames FIRST..SPLIT-1 develop, SPLIT..end check
 PEERS = ("mog2", "knn", "hog")
@@ -87,8 +94,9 @@ def load_truth(kind: str, gt_path: Path = GT_JSON) -> dict[int, list]:
             for k, people in d["frames"].items()}
 
 
-def mvtrack_detections(detect_args: list[str]) -> tuple[dict[int, list], float]:
-    """mvtrack-detect on vtest.avi: frame -> [(u, v, box)], and its median ms per frame."""
+def mvtrack_detections(detect_args: list[str]) -> tuple[dict[int, list], float, dict[int, np.ndarray]]:
+    """mvtrack-detect on vtest.avi: frame -> [(u, v, box)], its median ms per frame, and frame ->
+    its foreground mask (the message's runs, at the mask's resolution)."""
     import lcm
 
     mt = import_types()
@@ -101,11 +109,16 @@ def mvtrack_detections(detect_args: list[str]) -> tuple[dict[int, list], float]:
             raise SystemExit(f"mvtrack-detect failed: {p.stderr.strip().splitlines()[-1] if p.stderr.strip() else p.returncode}")
         m = re.search(r"detect p50 ([0-9.]+) ms", p.stderr)
         out: dict[int, list] = {}
+        masks: dict[int, np.ndarray] = {}
         for ev in lcm.EventLog(str(log), "r"):
             if ev.channel.startswith("DETECTIONS_"):
                 msg = mt.camera_frame_t.decode(ev.data)
                 out[int(msg.frame)] = [(d.u, d.v, tuple(d.bbox)) for d in msg.detections]
-    return out, float(m.group(1)) if m else float("nan")
+                if msg.num_runs:
+                    runs = np.asarray(msg.runs, int)
+                    masks[int(msg.frame)] = np.repeat(np.arange(len(runs)) % 2, runs).astype(np.uint8).reshape(
+                        msg.mask_height, msg.mask_width)
+    return out, float(m.group(1)) if m else float("nan"), masks
 
 
 def peer_detections(kind: str, progress: bool) -> tuple[dict[int, list], float]:
@@ -153,8 +166,28 @@ def miss_kind(u: float, v: float, dets: list, pts: np.ndarray, req_pts: np.ndarr
     return "below" if pts[i, 1] - v > radius and abs(pts[i, 0] - u) <= pts[i, 1] - v else "aside"
 
 
-def score_frame(dets: list, heads: list, radius: float, gt: bool) -> tuple[int, int, int, list[float], dict]:
-    """(required heads, found, false blobs, matched errors, misses by kind) of one frame"""
+MASK_KINDS = ("outline", "interior", "no_head")
+
+
+def mask_evidence(mask: np.ndarray, width: int, u: float, v: float, box: tuple | None) -> str:
+    """What the mask (of a picture `width` px wide) shows at a head top (u, v): outline, interior or
+    no_head (see the module's text)."""
+    s = width / mask.shape[1]
+    span = max(1, int(round(((box[3] - box[1]) / 8.0 if box is not None else s) / s)))
+    col = int(np.clip(u // s, 0, mask.shape[1] - 1))
+    row = int(np.clip(v // s, 0, mask.shape[0] - 1))
+    cols = slice(max(0, col - 1), col + 2)
+    at = mask[row:row + span, cols]
+    above = mask[max(0, row - span):row, cols]
+    if not at.size or at.mean() < 0.5:
+        return "no_head"
+    return "interior" if above.size and above.mean() >= 0.5 else "outline"
+
+
+def score_frame(dets: list, heads: list, radius: float, gt: bool,
+                mask: np.ndarray | None = None) -> tuple[int, int, int, list[float], dict, dict | None]:
+    """(required heads, found, false blobs, matched errors, misses by kind, misses by what the mask
+    shows or None without a mask) of one frame"""
     req = [(u, v) for u, v, _, r in heads if r]
     req_box = [b for _, _, b, r in heads if r]
     req_pts = np.array(req, float).reshape(-1, 2)
@@ -170,8 +203,11 @@ def score_frame(dets: list, heads: list, radius: float, gt: bool) -> tuple[int, 
         found[r[ok]] = True
         errs = list(cost[r, c][ok])
     misses = dict.fromkeys(MISS_KINDS, 0)
+    by_mask = dict.fromkeys(MASK_KINDS, 0) if mask is not None else None
     for k in np.flatnonzero(~found):
         misses[miss_kind(req[k][0], req[k][1], dets, pts, req_pts, int(k), radius, req_box[k])] += 1
+        if by_mask is not None:
+            by_mask[mask_evidence(mask, WIDTH, req[k][0], req[k][1], req_box[k])] += 1
     false = 0
     for i, d in enumerate(dets):
         if used[i]:
@@ -183,13 +219,14 @@ def score_frame(dets: list, heads: list, radius: float, gt: bool) -> tuple[int, 
                for _, _, b, r in heads):
             continue
         false += 1
-    return len(req), len(errs), false, errs, misses
+    return len(req), len(errs), false, errs, misses, by_mask
 
 
-def score(dets: dict[int, list], truth: dict[int, list], frames: list[int], radius: float, gt: bool) -> dict:
+def score(dets: dict[int, list], truth: dict[int, list], frames: list[int], radius: float, gt: bool,
+          masks: dict[int, np.ndarray] | None = None) -> dict:
     per = {}
     for f in frames:
-        per[f] = score_frame(dets.get(f, []), truth.get(f, []), radius, gt)
+        per[f] = score_frame(dets.get(f, []), truth.get(f, []), radius, gt, masks.get(f) if masks else None)
     return per
 
 
@@ -201,7 +238,9 @@ def summary(per: dict, frames: list[int]) -> dict:
     return {"frames": len(frames), "people": req, "found": found, "recall": found / max(req, 1),
             "false_blobs_per_frame": false / max(len(frames), 1),
             "head_error_px_median": float(np.median(errs)) if errs else float("nan"),
-            "misses": {k: sum(per[f][4][k] for f in frames) for k in MISS_KINDS}}
+            "misses": {k: sum(per[f][4][k] for f in frames) for k in MISS_KINDS},
+            **({"misses_by_mask": {k: sum(per[f][5][k] for f in frames) for k in MASK_KINDS}}
+               if frames and all(per[f][5] is not None for f in frames) else {})}
 
 
 def plot(path: Path, runs: dict[str, dict], frames: list[int]) -> None:
@@ -292,8 +331,8 @@ def main(argv: list[str] | None = None) -> int:
                  f"{SPLIT}-{frames[-1]}": [f for f in frames if f >= SPLIT]}
     runs: dict[str, dict] = {}
     progress = not a.json
-    dets, ms = mvtrack_detections(shlex.split(a.detect_args))
-    runs["mvtrack-detect"] = {"dets": dets, "ms": ms}
+    dets, ms, masks = mvtrack_detections(shlex.split(a.detect_args))
+    runs["mvtrack-detect"] = {"dets": dets, "ms": ms, "masks": masks}
     for p in (a.peers if a.peers else PEERS) if a.peers is not None else ():
         d, m = peer_detections(p, progress)
         runs[f"textbook {p}"] = {"dets": d, "ms": m}
@@ -302,7 +341,7 @@ def main(argv: list[str] | None = None) -> int:
                                                           for f, x in d.items()}}
     result = {"truth": a.truth, "radius_px": a.radius, "detectors": {}}
     for name, r in runs.items():
-        r["per_frame"] = score(r["dets"], truth, frames, a.radius, gt)
+        r["per_frame"] = score(r["dets"], truth, frames, a.radius, gt, r.get("masks"))
         result["detectors"][name] = {"ms_per_frame": r["ms"],
                                      **{k: summary(r["per_frame"], fs) for k, fs in parts.items()}}
     if a.plot and gt:
@@ -328,6 +367,12 @@ def main(argv: list[str] | None = None) -> int:
     print("(merged: in a blob whose point is another person's head; off centre: in a blob whose point lies on the "
           f"annotated box's top edge, more than {a.radius:g} px from its centre; aside / below: in a blob whose point "
           f"lies more than {a.radius:g} px to the side or above / below; no blob: in no blob's box)")
+    if "misses_by_mask" in ours[main_part]:
+        print("what its mask shows at those heads: " + "; ".join(
+            f"{k} " + ", ".join(f"{n} {kind.replace('_', ' ')}" for kind, n in ours[k]["misses_by_mask"].items())
+            for k in parts))
+        print("(outline: a top on the mask's outline; interior: foreground above it too, no edge; no head: the "
+              "mask lost it)")
     if a.plot and gt:
         print(f"plot: {a.plot}")
     return 0
