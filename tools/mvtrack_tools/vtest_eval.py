@@ -57,6 +57,7 @@ from scipy.optimize import linear_sum_assignment
 
 from .paths import BUILD, REPO, import_types
 from .progress import bar
+from .render import decode_runs
 
 VTEST = Path("/usr/share/doc/opencv-doc/examples/data/vtest.avi")
 LABELS = REPO / "tests/data/vtest_labels.json"
@@ -115,9 +116,7 @@ def mvtrack_detections(detect_args: list[str]) -> tuple[dict[int, list], float, 
                 msg = mt.camera_frame_t.decode(ev.data)
                 out[int(msg.frame)] = [(d.u, d.v, tuple(d.bbox)) for d in msg.detections]
                 if msg.num_runs:
-                    runs = np.asarray(msg.runs, int)
-                    masks[int(msg.frame)] = np.repeat(np.arange(len(runs)) % 2, runs).astype(np.uint8).reshape(
-                        msg.mask_height, msg.mask_width)
+                    masks[int(msg.frame)] = decode_runs(np.asarray(msg.runs, int), msg.mask_width, msg.mask_height)
     return out, float(m.group(1)) if m else float("nan"), masks
 
 
