@@ -18,7 +18,7 @@ mvt_real mvt_body_prob(mvt_real lo)
 }
 
 int mvt_body_silhouette(const mvt_tracker_t *self, const mvt_camera_t *cam, const mvt_real x[3], mvt_real box[4],
-                        mvt_real head[2])
+                        mvt_real head[2], mvt_real foot[2])
 {
     if (mvt_cam_project(cam, x, head, NULL) != MVT_OK) {
         return 0;
@@ -36,12 +36,21 @@ int mvt_body_silhouette(const mvt_tracker_t *self, const mvt_camera_t *cam, cons
     }
     box[0] = box[2] = head[0];
     box[1] = box[3] = head[1];
-    for (int i = 1; i < 6; i++) { /* i = 0, the head's centre, is `head` */
+    if (foot != NULL) {
+        foot[0] = head[0]; /* a camera looking down steeply past the feet: the head alone */
+        foot[1] = head[1];
+    }
+    for (int i = 1; i < 6; i++) { /* i = 0, the head's centre, is `head`; i = 3 the floor under it */
         const mvt_real s = (i % 3 == 0) ? MVT_R(0.0) : (i % 3 == 1 ? MVT_R(1.0) : MVT_R(-1.0));
-        const mvt_real p[3] = {x[0] + s * side[0], x[1] + s * side[1], i < 3 ? x[2] : MVT_R(0.0)};
+        const mvt_real p[3] = {i == 3 ? x[0] : x[0] + s * side[0], i == 3 ? x[1] : x[1] + s * side[1],
+                               i < 3 ? x[2] : MVT_R(0.0)};
         mvt_real uv[2];
         if (mvt_cam_project(cam, p, uv, NULL) != MVT_OK) {
             continue; /* feet behind a camera that looks down steeply: the head's edges bound it */
+        }
+        if (i == 3 && foot != NULL) {
+            foot[0] = uv[0];
+            foot[1] = uv[1];
         }
         box[0] = uv[0] < box[0] ? uv[0] : box[0];
         box[1] = uv[1] < box[1] ? uv[1] : box[1];
@@ -54,11 +63,11 @@ int mvt_body_silhouette(const mvt_tracker_t *self, const mvt_camera_t *cam, cons
 int mvt_body_axis(const mvt_tracker_t *self, const mvt_camera_t *cam, const mvt_real x[3], mvt_real axis[MVT_BODY_AXIS_N])
 {
     mvt_real head[2];
-    return mvt_cam_project(cam, x, head, NULL) == MVT_OK && mvt_body_axis_at(self, cam, x, head, axis);
+    return mvt_cam_project(cam, x, head, NULL) == MVT_OK && mvt_body_axis_at(self, cam, x, head, NULL, axis);
 }
 
 int mvt_body_axis_at(const mvt_tracker_t *self, const mvt_camera_t *cam, const mvt_real x[3], const mvt_real head[2],
-                     mvt_real axis[MVT_BODY_AXIS_N])
+                     const mvt_real foot_uv[2], mvt_real axis[MVT_BODY_AXIS_N])
 {
     const mvt_real foot[3] = {x[0], x[1], MVT_R(0.0)};
     const mvt_real mid[3] = {x[0], x[1], MVT_R(0.5) * x[2]};
@@ -69,7 +78,10 @@ int mvt_body_axis_at(const mvt_tracker_t *self, const mvt_camera_t *cam, const m
     }
     axis[0] = head[0];
     axis[1] = head[1];
-    if (mvt_cam_project(cam, foot, fuv, NULL) != MVT_OK) {
+    if (foot_uv != NULL) {
+        fuv[0] = foot_uv[0];
+        fuv[1] = foot_uv[1];
+    } else if (mvt_cam_project(cam, foot, fuv, NULL) != MVT_OK) {
         fuv[0] = axis[0]; /* a camera looking down steeply past the feet: the head alone */
         fuv[1] = axis[1];
     }
@@ -164,15 +176,19 @@ mvt_real mvt_body_silhouette_area(const mvt_real axis[MVT_BODY_AXIS_N])
     return area > MVT_R(1.0) ? area : MVT_R(1.0);
 }
 
-mvt_real mvt_body_fragment_density(const mvt_tracker_t *self, int k, int t, const mvt_real uv[2])
+int mvt_body_fragment_possible(const mvt_tracker_t *self, int k, int t)
 {
     const mvt_track_t *tr = &self->tracks[t];
+    return tr->id != 0 && !tr->dormant && tr->exist_lo > MVT_R(0.0) && self->body.axis[k][t][4] > MVT_R(0.0);
+}
+
+mvt_real mvt_body_fragment_density(const mvt_tracker_t *self, int k, int t, const mvt_real uv[2])
+{
     const mvt_real *axis = self->body.axis[k][t];
-    if (tr->id == 0 || tr->dormant || !(tr->exist_lo > MVT_R(0.0)) || !(axis[4] > MVT_R(0.0)) ||
-        !mvt_body_fragment_of(axis, uv)) {
+    if (!mvt_body_fragment_possible(self, k, t) || !mvt_body_fragment_of(axis, uv)) {
         return MVT_R(0.0);
     }
-    return mvt_body_prob(tr->exist_lo) * self->frag_n[k] / mvt_body_silhouette_area(axis);
+    return mvt_body_prob(self->tracks[t].exist_lo) * self->frag_n[k] / mvt_body_silhouette_area(axis);
 }
 
 int mvt_body_on_silhouette(const mvt_real axis[MVT_BODY_AXIS_N], const mvt_real uv[2], mvt_real slack_px)

@@ -131,19 +131,22 @@ mvt_real mvt_body_logit(mvt_real p);
 mvt_real mvt_body_prob(mvt_real lo);
 
 /* The silhouette of a body with head top x in camera cam: box (u0 v0 u1 v1, raw pixels) around the
- * projections of the head's and feet's edges, and the head's own projection. 0 when the head is
- * not in front of the camera (box and head unset). O(1): six projections. */
+ * projections of the head's and feet's edges, the head's own projection, and (foot, may be NULL)
+ * the floor point under the head's, or the head's where the floor is not in front of the camera
+ * (mvt_body_axis_at's foot). 0 when the head is not in front of the camera (box and head unset).
+ * O(1): six projections. */
 int mvt_body_silhouette(const mvt_tracker_t *self, const mvt_camera_t *cam, const mvt_real x[3], mvt_real box[4],
-                        mvt_real head[2]);
+                        mvt_real head[2], mvt_real foot[2]);
 
 /* The silhouette as the body's axis in the picture, thickened: axis = head u v, the floor point
  * under it u v, half the body's width at mid height (px), and MVT_BODY_SHADOW_M at the feet's depth
  * (px; 0 when the feet are not in front of the camera), all raw pixels. 0 when the head is not in
  * front of the camera. O(1). */
 int mvt_body_axis(const mvt_tracker_t *self, const mvt_camera_t *cam, const mvt_real x[3], mvt_real axis[MVT_BODY_AXIS_N]);
-/* The same, the head's projection `head` given. */
+/* The same, the head's projection `head` given, and the floor point's `foot` as mvt_body_silhouette
+ * gives it (NULL: projected here). */
 int mvt_body_axis_at(const mvt_tracker_t *self, const mvt_camera_t *cam, const mvt_real x[3], const mvt_real head[2],
-                     mvt_real axis[MVT_BODY_AXIS_N]);
+                     const mvt_real foot[2], mvt_real axis[MVT_BODY_AXIS_N]);
 
 /* Two silhouettes touch in the picture (one blob): their axes come closer than their mean width. */
 int mvt_body_touch(const mvt_real a[MVT_BODY_AXIS_N], const mvt_real b[MVT_BODY_AXIS_N]);
@@ -166,6 +169,9 @@ mvt_real mvt_body_silhouette_area(const mvt_real axis[MVT_BODY_AXIS_N]);
  * uv: its fragments per frame (the camera's learnt rate) over its silhouette's area, times its
  * existence; 0 off the silhouette. O(1). */
 mvt_real mvt_body_fragment_density(const mvt_tracker_t *self, int k, int t, const mvt_real uv[2]);
+/* Track t's body may have fragments in camera k (it is tracked, awake, likely present and shows
+ * there): mvt_body_fragment_density is 0 everywhere otherwise. */
+int mvt_body_fragment_possible(const mvt_tracker_t *self, int k, int t);
 
 /* Image point uv lies on the silhouette: within its half width and slack_px of the axis. */
 int mvt_body_on_silhouette(const mvt_real axis[MVT_BODY_AXIS_N], const mvt_real uv[2], mvt_real slack_px);

@@ -125,21 +125,38 @@ void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k)
         ws->clutter_now[k] = sent > shown ? (mvt_real)(sent - shown) : MVT_R(0.0);
     }
     const mvt_real lambda = mvt_body_clutter_density(self, k);
-    /* each blob's top as a fragment of the bodies likely present that it lies on */
+    /* each blob's top as a fragment of the bodies likely present that it lies on: each such body's
+     * density (mvt_body_fragment_density) is its scale over its silhouette, found once per body */
+    int16_t fbody[MVT_MAX_TARGETS];
+    mvt_real fscale[MVT_MAX_TARGETS];
+    int nf = 0;
+    for (int i = 0; i < nr; i++) {
+        const mvt_real *axis = ws->axis[k][rows[i]];
+        if (!mvt_body_fragment_possible(self, k, rows[i])) {
+            continue;
+        }
+        fbody[nf] = rows[i];
+        fscale[nf] = mvt_body_prob(self->tracks[rows[i]].exist_lo) * self->frag_n[k] / mvt_body_silhouette_area(axis);
+        nf++;
+    }
     for (int d = 0; d < nd; d++) {
         ws->frag_dens[d] = MVT_R(0.0);
         if (!self->meas_ok[k][d]) {
             continue;
         }
         const mvt_real uv[2] = {view->det[d].u, view->det[d].v};
-        for (int i = 0; i < nr; i++) {
-            ws->frag_dens[d] += mvt_body_fragment_density(self, k, rows[i], uv);
+        for (int f = 0; f < nf; f++) {
+            if (mvt_body_fragment_of(ws->axis[k][fbody[f]], uv)) {
+                ws->frag_dens[d] += fscale[f];
+            }
         }
     }
     if (nr > 0 && nd > 0) {
         const int nc = nd + nr;
         mvt_real *cost = self->cl_cost;
         int any = 0;
+        const int chi2 = self->cfg.gate == MVT_GATE_CHI2;
+        const mvt_real r_out2 = self->cfg.motion.outlier_radius_px * self->cfg.motion.outlier_radius_px;
         for (int i = 0; i < nr; i++) {
             const int t = rows[i];
             const mvt_real rp = mvt_body_prob(self->tracks[t].exist_lo) * ws->pd[t];
@@ -148,10 +165,27 @@ void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k)
                 cost[i * nc + c] = MVT_R(-1.0);
             }
             cost[i * nc + nd + i] = GAIN_OFFSET;
+            const mvt_pkf_pred_t *pr = &self->pred[t];
+            /* a blob farther than the displaced radius and than the gate could reach along S's
+             * longest axis (its largest eigenvalue is at most its trace) has density 0 here:
+             * skipped before its innovation is computed, the same assignment at a fraction of the
+             * cost (most blobs are far from most heads) */
+            const mvt_real gate = self->cfg.numerics.gate_chi2;
+            const mvt_real far2 = chi2 ? MVT_R(1.01) * gate * (pr->hph[0] + pr->hph[2]) : MVT_R(-1.0);
             for (int d = 0; d < nd; d++) {
                 mvt_pkf_innov_t in;
-                if (!self->meas_ok[k][d] || !(rp > MVT_R(0.0)) ||
-                    mvt_pkf_innovation_from(&self->pred[t], &self->meas[k][d], NULL, &in) != MVT_OK) {
+                if (!self->meas_ok[k][d] || !(rp > MVT_R(0.0))) {
+                    continue;
+                }
+                if (chi2) {
+                    const mvt_real *z = pr->lin == MVT_PKF_JACOBIAN ? self->meas[k][d].raw : self->meas[k][d].ideal;
+                    const mvt_real y0 = z[0] - pr->h[0], y1 = z[1] - pr->h[1];
+                    const mvt_real y2 = y0 * y0 + y1 * y1;
+                    if (y2 > r_out2 && y2 > far2 + MVT_R(2.02) * gate * self->meas[k][d].var_px2) {
+                        continue;
+                    }
+                }
+                if (mvt_pkf_innovation_from(pr, &self->meas[k][d], NULL, &in) != MVT_OK) {
                     continue;
                 }
                 const mvt_real dens = mvt_body_head_density(self, &in, mvt_body_gated(self, t, k, d, &in));

@@ -21,19 +21,37 @@
 #include <math.h>
 #include <stddef.h>
 
-mvt_real mvt_body_shown(const mvt_tracker_t *self, int k, const mvt_real axis[MVT_BODY_AXIS_N], int self_t)
+/* The bodies that may hide another in camera k: tracked, likely present, and shown there. */
+static int hiders(const mvt_tracker_t *self, int k, int16_t js[MVT_MAX_TARGETS])
+{
+    int n = 0;
+    for (int j = 0; j < MVT_MAX_TARGETS; j++) {
+        if (self->tracks[j].id != 0 && self->tracks[j].exist_lo > MVT_R(0.0) && self->body.axis[k][j][4] > MVT_R(0.0)) {
+            js[n++] = (int16_t)j;
+        }
+    }
+    return n;
+}
+
+static mvt_real shown_among(const mvt_tracker_t *self, int k, const mvt_real axis[MVT_BODY_AXIS_N], int self_t,
+                            const int16_t js[], int n)
 {
     mvt_real shown = MVT_R(1.0);
-    for (int j = 0; j < MVT_MAX_TARGETS; j++) {
+    for (int i = 0; i < n; i++) {
+        const int j = js[i];
         const mvt_real *aj = self->body.axis[k][j];
-        if (j == self_t || self->tracks[j].id == 0 || !(self->tracks[j].exist_lo > MVT_R(0.0)) || !(aj[4] > MVT_R(0.0))) {
-            continue;
-        }
-        if (aj[1] <= axis[1] && mvt_body_touch(aj, axis)) {
+        if (j != self_t && aj[1] <= axis[1] && mvt_body_touch(aj, axis)) {
             shown *= MVT_R(1.0) - mvt_body_prob(self->tracks[j].exist_lo) * (MVT_R(1.0) - self->p_hidden_k[k]);
         }
     }
     return shown;
+}
+
+mvt_real mvt_body_shown(const mvt_tracker_t *self, int k, const mvt_real axis[MVT_BODY_AXIS_N], int self_t)
+{
+    int16_t js[MVT_MAX_TARGETS];
+    const int n = hiders(self, k, js);
+    return shown_among(self, k, axis, self_t, js, n);
 }
 
 int mvt_body_occluded(const mvt_tracker_t *self, const mvt_real o[3], const mvt_real dir[3], mvt_real s_max)
@@ -113,7 +131,9 @@ void mvt_body_visibility(mvt_tracker_t *self, const mvt_view_t *view, int k)
             self->counters.behind_camera++;
             continue;
         }
-        if (!mvt_body_silhouette(self, cam, tr->s.x, sil, ws->head[t]) || !mvt_body_axis_at(self, cam, tr->s.x, ws->head[t], axis)) {
+        mvt_real foot[2];
+        if (!mvt_body_silhouette(self, cam, tr->s.x, sil, ws->head[t], foot) ||
+            !mvt_body_axis_at(self, cam, tr->s.x, ws->head[t], foot, axis)) {
             sil[0] = MVT_R(1.0);
             sil[2] = MVT_R(0.0);
             axis[4] = MVT_R(-1.0);
@@ -125,10 +145,12 @@ void mvt_body_visibility(mvt_tracker_t *self, const mvt_view_t *view, int k)
             ws->pd[t] = self->p_detect_k[k];
         }
     }
+    int16_t js[MVT_MAX_TARGETS];
+    const int n = hiders(self, k, js);
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         ws->on_bg[t] = (uint8_t)(ws->pd[t] > MVT_R(0.0) && mvt_body_head_on_background(self, view, k, &self->pred[t]));
         if (ws->pd[t] > MVT_R(0.0) && !ws->on_bg[t]) {
-            ws->pd[t] *= mvt_body_shown(self, k, ws->axis[k][t], t);
+            ws->pd[t] *= shown_among(self, k, ws->axis[k][t], t, js, n);
         }
     }
 }

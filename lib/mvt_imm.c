@@ -504,7 +504,11 @@ static void apply(mvt_cv_state_t *mj, int m, const imm_upd_t *u, mvt_real w)
     {                                                                                                                \
         /* K y = c0 v0 + c1 v1, so the whole change of P is a quadratic form in (v0, v1):                            \
          * P -= [v0 v1] A [v0 v1]^T, A = w diag(i0, i1) - w (1 - w) c c^T (2 flops per element) */                   \
-        const mvt_real *v0 = &u->hpP[0], *v1 = &u->hpP[6];                                                           \
+        mvt_real v0[NX], v1[NX]; /* copies: the stores into P below cannot be taken for writes to them */        \
+        for (int i = 0; i < NX; i++) {                                                                               \
+            v0[i] = u->hpP[i];                                                                                       \
+            v1[i] = u->hpP[6 + i];                                                                                   \
+        }                                                                                                            \
         const mvt_real i0 = u->S[0], i1 = u->S[1];                                                                   \
         const mvt_real c0 = u->y[0] * i0, c1 = u->y[1] * i1;                                                         \
         const mvt_real spread = w * (MVT_R(1.0) - w);                                                                \
@@ -516,8 +520,8 @@ static void apply(mvt_cv_state_t *mj, int m, const imm_upd_t *u, mvt_real w)
             t1[i] = a01 * v0[i] + a11 * v1[i];                                                                       \
         }                                                                                                            \
         mvt_real *P = mj->P;                                                                                         \
-        for (int i = 0; i < NX; i++) {                                                                               \
-            for (int j = i; j < NX; j++) {                                                                           \
+        _Pragma("GCC unroll 6") for (int i = 0; i < NX; i++) {                                                       \
+            _Pragma("GCC unroll 6") for (int j = i; j < NX; j++) {                                                   \
                 const mvt_real v = P[i * 6 + j] - (v0[i] * t0[j] + v1[i] * t1[j]);                                   \
                 P[i * 6 + j] = v;                                                                                    \
                 P[j * 6 + i] = v;                                                                                    \

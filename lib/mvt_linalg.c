@@ -19,12 +19,13 @@ const char *mvt_err_str(mvt_err_t err)
 
 int mvt_la_all_finite(const mvt_real *x, int n)
 {
+    /* without an early exit, so that the compiler can test several at once (the common case is
+     * that every one is finite, and n is small) */
+    int ok = 1;
     for (int i = 0; i < n; i++) {
-        if (!isfinite(x[i])) {
-            return 0;
-        }
+        ok &= isfinite(x[i]) != 0;
     }
-    return 1;
+    return ok;
 }
 
 mvt_err_t mvt_la_cholesky(int n, mvt_real *a)
