@@ -94,3 +94,118 @@ mvt_err_t mvt_assoc_solve(const mvt_real *cost, int n_rows, int n_cols, int stri
     }
     return MVT_OK;
 }
+
+mvt_err_t mvt_assoc_solve_own(const mvt_real *cost, int n_rows, int n_cols, int stride, int *row_to_col,
+                              mvt_assoc_ws_t *ws)
+{
+    MVT_ASSERT(cost != NULL && row_to_col != NULL && ws != NULL);
+    if (n_rows < 1 || n_rows > n_cols || n_rows > MVT_ASSOC_MAX_ROWS || n_cols > MVT_ASSOC_MAX_COLS ||
+        stride < n_cols) {
+        return MVT_ERR_INVALID;
+    }
+    const int own0 = n_cols - n_rows;
+    mvt_real worst = MVT_R(0.0);
+    for (int r = 0; r < n_rows; r++) {
+        const mvt_real *row = &cost[r * stride];
+        for (int c = own0; c < n_cols; c++) {
+            if (feasible(row[c]) != (c - own0 == r)) {
+                return mvt_assoc_solve(cost, n_rows, n_cols, stride, row_to_col, ws);
+            }
+        }
+        int n = 0;
+        for (int c = 0; c < own0; c++) {
+            if (feasible(row[c])) {
+                ws->feasible[r][n++] = (int16_t)c;
+                worst = row[c] > worst ? row[c] : worst;
+            }
+        }
+        ws->feasible[r][n++] = (int16_t)(own0 + r);
+        worst = row[own0 + r] > worst ? row[own0 + r] : worst;
+        ws->n_feasible[r] = (int16_t)n;
+    }
+    /* the values mvt_assoc_solve starts from; `big` itself is never needed here */
+    const mvt_real inf = (worst + MVT_R(1.0)) * (mvt_real)(n_rows + 1) * (mvt_real)(4 * (n_rows + 1));
+    for (int j = 0; j <= n_cols; j++) {
+        ws->v[j] = MVT_R(0.0);
+        ws->p[j] = 0;
+        ws->way[j] = 0;
+        ws->minv[j] = inf;
+        ws->used[j] = 0;
+        ws->seen[j] = 0;
+    }
+    for (int i = 0; i <= n_rows; i++) {
+        ws->u[i] = MVT_R(0.0);
+    }
+    for (int i = 1; i <= n_rows; i++) {
+        ws->p[0] = (int16_t)i;
+        int j0 = 0, n = 0;
+        do {
+            ws->used[j0] = 1;
+            const int i0 = ws->p[j0];
+            const mvt_real *row = &cost[(i0 - 1) * stride];
+            const int16_t *cols = ws->feasible[i0 - 1];
+            for (int f = 0; f < ws->n_feasible[i0 - 1]; f++) {
+                const int c = cols[f];
+                const mvt_real a = row[c];
+                const int j = c + 1;
+                if (ws->used[j]) {
+                    continue;
+                }
+                const mvt_real cur = a - ws->u[i0] - ws->v[j];
+                if (cur < ws->minv[j]) {
+                    if (!ws->seen[j]) {
+                        ws->seen[j] = 1;
+                        ws->reached[n++] = (int16_t)j;
+                    }
+                    ws->minv[j] = cur;
+                    ws->way[j] = (int16_t)j0;
+                }
+            }
+            mvt_real delta = inf;
+            int j1 = 0;
+            for (int q = 0; q < n; q++) { /* the smallest, and of equals the first column, as mvt_assoc_solve */
+                const int j = ws->reached[q];
+                if (!ws->used[j] && (ws->minv[j] < delta || (!(ws->minv[j] > delta) && j < j1))) {
+                    delta = ws->minv[j];
+                    j1 = j;
+                }
+            }
+            if (j1 == 0) {
+                return MVT_ERR_NUMERIC; /* only with non-finite arithmetic; cannot happen otherwise */
+            }
+            ws->u[ws->p[0]] += delta; /* column 0, the search's start, is always used */
+            for (int q = 0; q < n; q++) {
+                const int j = ws->reached[q];
+                if (ws->used[j]) {
+                    ws->u[ws->p[j]] += delta;
+                    ws->v[j] -= delta;
+                } else {
+                    ws->minv[j] -= delta;
+                }
+            }
+            j0 = j1;
+        } while (ws->p[j0] != 0);
+        do {
+            const int j1 = ws->way[j0];
+            ws->p[j0] = ws->p[j1];
+            j0 = j1;
+        } while (j0 != 0);
+        for (int q = 0; q < n; q++) { /* back to the state a new search starts from */
+            const int j = ws->reached[q];
+            ws->minv[j] = inf;
+            ws->used[j] = 0;
+            ws->seen[j] = 0;
+        }
+        ws->used[0] = 0;
+    }
+    for (int r = 0; r < n_rows; r++) {
+        row_to_col[r] = -1;
+    }
+    for (int j = 1; j <= n_cols; j++) {
+        const int i = ws->p[j];
+        if (i > 0 && feasible(cost[(i - 1) * stride + (j - 1)])) {
+            row_to_col[i - 1] = j - 1;
+        }
+    }
+    return MVT_OK;
+}

@@ -202,7 +202,7 @@ void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k)
             }
         }
         int r2c[MVT_MAX_TARGETS];
-        if (any && mvt_assoc_solve(cost, nr, nc, nc, r2c, &self->assoc_ws) == MVT_OK) {
+        if (any && mvt_assoc_solve_own(cost, nr, nc, nc, r2c, &self->assoc_ws) == MVT_OK) {
             for (int i = 0; i < nr; i++) {
                 if (r2c[i] >= 0 && r2c[i] < nd) {
                     ws->assign[rows[i]] = (int16_t)r2c[i];

@@ -125,6 +125,61 @@ static void test_mvt_assoc_solve_full_capacity_identity(void **state)
     }
 }
 
+/* Matrices shaped as the tracker's per-camera assignment: n detections, then one column per row
+ * that only that row may take (its "missed", at a cost above its other choices, or own_anywhere:
+ * any), feasible entries with share `dense`, costs drawn from `levels` values (few levels: many
+ * exact ties). The solver for that shape must give the general solver's assignment, row for row,
+ * ties included. */
+static void check_own_columns(uint32_t seed, int trials, int max_rows, int max_dets, double dense, int levels,
+                              int own_anywhere)
+{
+    test_rng_t rng = {seed};
+    static mvt_real c[MVT_ASSOC_MAX_ROWS * MVT_ASSOC_MAX_COLS];
+    for (int trial = 0; trial < trials; trial++) {
+        const int nr = 1 + (int)(test_uniform(&rng) * max_rows);
+        const int nd = (int)(test_uniform(&rng) * (max_dets + 1));
+        const int nc = nd + nr;
+        for (int r = 0; r < nr; r++) {
+            for (int j = 0; j < nd; j++) {
+                c[r * nc + j] = test_uniform(&rng) < dense ? (mvt_real)(int)(test_uniform(&rng) * levels) : -1.0f;
+            }
+            for (int j = 0; j < nr; j++) {
+                c[r * nc + nd + j] = j != r        ? -1.0f
+                                     : own_anywhere ? (mvt_real)(int)(test_uniform(&rng) * levels)
+                                                    : (mvt_real)levels;
+            }
+        }
+        int a[MVT_ASSOC_MAX_ROWS], b[MVT_ASSOC_MAX_ROWS];
+        assert_int_equal(mvt_assoc_solve(c, nr, nc, nc, a, &g_ws), MVT_OK);
+        assert_int_equal(mvt_assoc_solve_own(c, nr, nc, nc, b, &g_ws), MVT_OK);
+        for (int r = 0; r < nr; r++) {
+            assert_int_equal(a[r], b[r]);
+        }
+    }
+}
+
+static void test_mvt_assoc_solve_own_same_as_general_solver(void **state)
+{
+    (void)state;
+    check_own_columns(31, 2000, 12, 14, 0.5, 1000, 0); /* distinct costs, mostly */
+    check_own_columns(32, 2000, 12, 14, 0.8, 4, 0);    /* many exact ties */
+    check_own_columns(33, 2000, 12, 14, 0.6, 4, 1);    /* a row's own column any cost */
+    check_own_columns(34, 300, MVT_ASSOC_MAX_ROWS, MVT_ASSOC_MAX_COLS - MVT_ASSOC_MAX_ROWS, 0.3, 50, 1);
+}
+
+/* Without the own-column shape it is the general solver. */
+static void test_mvt_assoc_solve_own_other_shapes_fall_back(void **state)
+{
+    (void)state;
+    const mvt_real c[6] = {1, 2, 5, 3, 10, 5}; /* the last two columns feasible for both rows */
+    int a[2], b[2];
+    assert_int_equal(mvt_assoc_solve(c, 2, 3, 3, a, &g_ws), MVT_OK);
+    assert_int_equal(mvt_assoc_solve_own(c, 2, 3, 3, b, &g_ws), MVT_OK);
+    assert_int_equal(a[0], b[0]);
+    assert_int_equal(a[1], b[1]);
+    assert_int_equal(mvt_assoc_solve_own(c, 2, 1, 1, b, &g_ws), MVT_ERR_INVALID);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -133,6 +188,8 @@ int main(void)
         cmocka_unit_test(test_mvt_assoc_solve_greedy_trap_global_optimum),
         cmocka_unit_test(test_mvt_assoc_solve_bad_sizes_invalid),
         cmocka_unit_test(test_mvt_assoc_solve_full_capacity_identity),
+        cmocka_unit_test(test_mvt_assoc_solve_own_same_as_general_solver),
+        cmocka_unit_test(test_mvt_assoc_solve_own_other_shapes_fall_back),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
