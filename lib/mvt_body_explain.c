@@ -2,9 +2,9 @@
  * mvt_body_explain.c - what each of camera k's blobs is: a track's head, a fragment of a tracked
  * body, or unexplained (clutter, or a person nobody tracks yet).
  *
- * Heads: one global assignment per camera (mvt_assoc, rows the tracks in front of the camera,
- * columns the blobs and one "missed" column per track). Track t exists and shows its head with
- * probability r p, r its existence, p its detection probability here (mvt_body_vis.c); the head
+ * Heads: one global assignment per camera (mvt_assoc_solve_own, rows the tracks in front of the
+ * camera, columns the blobs and one "missed" column per track). Track t exists and shows its head
+ * with probability r p, r its existence, p its detection probability here (mvt_body_vis.c); the head
  * is then the blob at innovation y with the motion model's density (mvt_body_head_density: the
  * person's N(y; 0, S) inside the chi-square gate, or displaced within outlier_radius_px), while
  * clutter lies anywhere in the picture with density lambda (mvt_body_clutter_density). Giving blob
