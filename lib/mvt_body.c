@@ -109,22 +109,24 @@ static mvt_real cross2(const mvt_real o[2], const mvt_real a[2], const mvt_real 
     return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
 }
 
-int mvt_body_touch(const mvt_real a[MVT_BODY_AXIS_N], const mvt_real b[MVT_BODY_AXIS_N])
+mvt_real mvt_body_touch(const mvt_real a[MVT_BODY_AXIS_N], const mvt_real b[MVT_BODY_AXIS_N])
 {
     const mvt_real w = a[4] + b[4]; /* the mean width: half of each full width */
+    const mvt_real sd = MVT_BODY_WIDTH_SD * MVT_SQRT(a[4] * a[4] + b[4] * b[4]);
+    const mvt_real reach = w + MVT_R(4.0) * sd; /* beyond it the chance is under 4e-5 */
     const mvt_real *a0 = a, *a1 = a + 2, *b0 = b, *b1 = b + 2;
-    /* boxes of the axes, apart by more than the width: no contact (most pairs) */
-    if ((a0[0] < a1[0] ? a0[0] : a1[0]) - w > (b0[0] > b1[0] ? b0[0] : b1[0]) ||
-        (b0[0] < b1[0] ? b0[0] : b1[0]) - w > (a0[0] > a1[0] ? a0[0] : a1[0]) ||
-        (a0[1] < a1[1] ? a0[1] : a1[1]) - w > (b0[1] > b1[1] ? b0[1] : b1[1]) ||
-        (b0[1] < b1[1] ? b0[1] : b1[1]) - w > (a0[1] > a1[1] ? a0[1] : a1[1])) {
-        return 0;
+    /* boxes of the axes, apart by more than the reach: no contact (most pairs) */
+    if ((a0[0] < a1[0] ? a0[0] : a1[0]) - reach > (b0[0] > b1[0] ? b0[0] : b1[0]) ||
+        (b0[0] < b1[0] ? b0[0] : b1[0]) - reach > (a0[0] > a1[0] ? a0[0] : a1[0]) ||
+        (a0[1] < a1[1] ? a0[1] : a1[1]) - reach > (b0[1] > b1[1] ? b0[1] : b1[1]) ||
+        (b0[1] < b1[1] ? b0[1] : b1[1]) - reach > (a0[1] > a1[1] ? a0[1] : a1[1])) {
+        return MVT_R(0.0);
     }
     /* crossing axes */
     const mvt_real d1 = cross2(a0, a1, b0), d2 = cross2(a0, a1, b1), d3 = cross2(b0, b1, a0), d4 = cross2(b0, b1, a1);
     if (((d1 > MVT_R(0.0) && d2 < MVT_R(0.0)) || (d1 < MVT_R(0.0) && d2 > MVT_R(0.0))) &&
         ((d3 > MVT_R(0.0) && d4 < MVT_R(0.0)) || (d3 < MVT_R(0.0) && d4 > MVT_R(0.0)))) {
-        return 1;
+        return MVT_R(1.0);
     }
     mvt_real m = point_seg_d2(a0, b0, b1);
     mvt_real e = point_seg_d2(a1, b0, b1);
@@ -133,7 +135,11 @@ int mvt_body_touch(const mvt_real a[MVT_BODY_AXIS_N], const mvt_real b[MVT_BODY_
     m = e < m ? e : m;
     e = point_seg_d2(b1, a0, a1);
     m = e < m ? e : m;
-    return m < w * w;
+    if (!(sd > MVT_R(0.0))) {
+        return m < w * w ? MVT_R(1.0) : MVT_R(0.0);
+    }
+    /* P(gap < w) with w ~ N(a4 + b4, sd^2) */
+    return MVT_R(0.5) * MVT_ERFC((MVT_SQRT(m) - w) / (sd * MVT_R(1.41421356)));
 }
 
 int mvt_body_on_body_below_head(const mvt_real axis[MVT_BODY_AXIS_N], const mvt_real uv[2])

@@ -78,6 +78,11 @@
  * floor up to MVT_BODY_P_SHOWN_HIDDEN_MAX. */
 #define MVT_BODY_P_SHOWN_HIDDEN MVT_R(0.02)
 #define MVT_BODY_P_SHOWN_HIDDEN_MAX MVT_R(0.9)
+/* How much a body's width in the picture differs from the model's 2 body.halfwidth_m, relative to
+ * it: people's shoulders differ by about this much, and where two tracked people stand is known to
+ * a few centimetres. Whether two silhouettes touch (mvt_body_touch) is then a probability that
+ * falls smoothly over the last few pixels of the gap, not a step at one pixel. */
+#define MVT_BODY_WIDTH_SD MVT_R(0.15)
 /* The probability that a camera's foreground mask shows background all around a visible head of a
  * person who is there (clothes and hair the colour of the background behind them, a segmentation
  * that lost the person): a head missed where the mask is empty weighs this, not the plain miss's
@@ -148,8 +153,10 @@ int mvt_body_axis(const mvt_tracker_t *self, const mvt_camera_t *cam, const mvt_
 int mvt_body_axis_at(const mvt_tracker_t *self, const mvt_camera_t *cam, const mvt_real x[3], const mvt_real head[2],
                      const mvt_real foot[2], mvt_real axis[MVT_BODY_AXIS_N]);
 
-/* Two silhouettes touch in the picture (one blob): their axes come closer than their mean width. */
-int mvt_body_touch(const mvt_real a[MVT_BODY_AXIS_N], const mvt_real b[MVT_BODY_AXIS_N]);
+/* The probability that two silhouettes touch in the picture (one blob, or one hiding the other):
+ * that the gap between their axes is under their summed half widths, each half width spread by
+ * MVT_BODY_WIDTH_SD of itself; 1 where the axes cross. */
+mvt_real mvt_body_touch(const mvt_real a[MVT_BODY_AXIS_N], const mvt_real b[MVT_BODY_AXIS_N]);
 
 /* Image point uv lies on the silhouette (within its half width of the axis) and at least
  * MVT_BODY_FRAGMENT_BELOW of the axis' length below the head: a fragment's top. */
@@ -203,10 +210,11 @@ mvt_err_t mvt_body_feet_innovation(const mvt_tracker_t *self, const mvt_cv_state
 
 /* The chance that camera k shows a head with silhouette axis (mvt_body_axis) as a blob top of its
  * own, given the bodies tracked there (ws.axis of this camera; track self_t, or -1, excluded):
- * every body more likely present than not whose silhouette touches this one and whose head is
- * higher in the picture makes the blob's top its own (a nearer body hides the head, or the two
- * merge into one blob), and lowers the chance to camera k's learnt rate of hidden heads shown
- * (from MVT_BODY_P_SHOWN_HIDDEN) by its existence. O(T). */
+ * every body more likely present than not whose silhouette touches this one (mvt_body_touch's
+ * probability) and whose head is higher in the picture makes the blob's top its own (a nearer body
+ * hides the head, or the two merge into one blob), and lowers the chance toward camera k's learnt
+ * rate of hidden heads shown (from MVT_BODY_P_SHOWN_HIDDEN) by its existence times that
+ * probability. O(T). */
 mvt_real mvt_body_shown(const mvt_tracker_t *self, int k, const mvt_real axis[MVT_BODY_AXIS_N], int self_t);
 
 /* Detection d of camera k, at innovation in from track t's prediction, lies in the track's gate:

@@ -6,7 +6,9 @@
  * body (one more likely there than not) with a higher head is hidden behind it or merged into one
  * blob with it, whose reported top is the other head: its head shows as a top of its own only with
  * the camera's learnt rate of hidden heads shown (p_hidden_k, from MVT_BODY_P_SHOWN_HIDDEN;
- * mvt_body_shown). A head outside the picture, or behind the camera, is
+ * mvt_body_shown). Whether two silhouettes touch is a probability (mvt_body_touch: bodies differ in
+ * width), so a head beside another's silhouette is half expected where the two just touch, not
+ * given up at one pixel. A head outside the picture, or behind the camera, is
  * not reported at all. Where the camera sent its foreground mask and the mask holds nothing near
  * the predicted head, nothing hides the head there (a body in front of it, or one it merged with,
  * would be foreground): it is not hidden, and is reported with p_detect; that it is missed there
@@ -40,8 +42,12 @@ static mvt_real shown_among(const mvt_tracker_t *self, int k, const mvt_real axi
     for (int i = 0; i < n; i++) {
         const int j = js[i];
         const mvt_real *aj = self->body.axis[k][j];
-        if (j != self_t && aj[1] <= axis[1] && mvt_body_touch(aj, axis)) {
-            shown *= MVT_R(1.0) - mvt_body_prob(self->tracks[j].exist_lo) * (MVT_R(1.0) - self->p_hidden_k[k]);
+        if (j == self_t || !(aj[1] <= axis[1])) {
+            continue;
+        }
+        const mvt_real touch = mvt_body_touch(aj, axis);
+        if (touch > MVT_R(0.0)) {
+            shown *= MVT_R(1.0) - touch * mvt_body_prob(self->tracks[j].exist_lo) * (MVT_R(1.0) - self->p_hidden_k[k]);
         }
     }
     return shown;
