@@ -138,6 +138,9 @@ mvt_real mvt_body_touch(const mvt_real a[MVT_BODY_AXIS_N], const mvt_real b[MVT_
     if (!(sd > MVT_R(0.0))) {
         return m < w * w ? MVT_R(1.0) : MVT_R(0.0);
     }
+    if (m >= reach * reach) {
+        return MVT_R(0.0);
+    }
     /* P(gap < w) with w ~ N(a4 + b4, sd^2) */
     return MVT_R(0.5) * MVT_ERFC((MVT_SQRT(m) - w) / (sd * MVT_R(1.41421356)));
 }

@@ -7,7 +7,7 @@
  * blob with it, whose reported top is the other head: its head shows as a top of its own only with
  * the camera's learnt rate of hidden heads shown (p_hidden_k, from MVT_BODY_P_SHOWN_HIDDEN;
  * mvt_body_shown). Whether two silhouettes touch is a probability (mvt_body_touch: bodies differ in
- * width), so a head beside another's silhouette is half expected where the two just touch, not
+ * width), so a head whose silhouette just reaches another's is hidden at about even odds, not
  * given up at one pixel. A head outside the picture, or behind the camera, is
  * not reported at all. Where the camera sent its foreground mask and the mask holds nothing near
  * the predicted head, nothing hides the head there (a body in front of it, or one it merged with,
@@ -23,12 +23,16 @@
 #include <math.h>
 #include <stddef.h>
 
-/* The bodies that may hide another in camera k: tracked, likely present, and shown there. */
-static int hiders(const mvt_tracker_t *self, int k, int16_t js[MVT_MAX_TARGETS])
+/* The bodies that may hide another in camera k: tracked, likely present, their silhouette in front
+ * of the camera; with prob non-NULL, each one's probability of existence too. */
+static int hiders(const mvt_tracker_t *self, int k, int16_t js[MVT_MAX_TARGETS], mvt_real *prob)
 {
     int n = 0;
     for (int j = 0; j < MVT_MAX_TARGETS; j++) {
         if (self->tracks[j].id != 0 && self->tracks[j].exist_lo > MVT_R(0.0) && self->body.axis[k][j][4] > MVT_R(0.0)) {
+            if (prob != NULL) {
+                prob[n] = mvt_body_prob(self->tracks[j].exist_lo);
+            }
             js[n++] = (int16_t)j;
         }
     }
@@ -36,7 +40,7 @@ static int hiders(const mvt_tracker_t *self, int k, int16_t js[MVT_MAX_TARGETS])
 }
 
 static mvt_real shown_among(const mvt_tracker_t *self, int k, const mvt_real axis[MVT_BODY_AXIS_N], int self_t,
-                            const int16_t js[], int n)
+                            const int16_t js[], const mvt_real *prob, int n)
 {
     mvt_real shown = MVT_R(1.0);
     for (int i = 0; i < n; i++) {
@@ -47,7 +51,8 @@ static mvt_real shown_among(const mvt_tracker_t *self, int k, const mvt_real axi
         }
         const mvt_real touch = mvt_body_touch(aj, axis);
         if (touch > MVT_R(0.0)) {
-            shown *= MVT_R(1.0) - touch * mvt_body_prob(self->tracks[j].exist_lo) * (MVT_R(1.0) - self->p_hidden_k[k]);
+            const mvt_real r = prob != NULL ? prob[i] : mvt_body_prob(self->tracks[j].exist_lo);
+            shown *= MVT_R(1.0) - touch * r * (MVT_R(1.0) - self->p_hidden_k[k]);
         }
     }
     return shown;
@@ -56,8 +61,8 @@ static mvt_real shown_among(const mvt_tracker_t *self, int k, const mvt_real axi
 mvt_real mvt_body_shown(const mvt_tracker_t *self, int k, const mvt_real axis[MVT_BODY_AXIS_N], int self_t)
 {
     int16_t js[MVT_MAX_TARGETS];
-    const int n = hiders(self, k, js);
-    return shown_among(self, k, axis, self_t, js, n);
+    const int n = hiders(self, k, js, NULL);
+    return shown_among(self, k, axis, self_t, js, NULL, n);
 }
 
 int mvt_body_occluded(const mvt_tracker_t *self, const mvt_real o[3], const mvt_real dir[3], mvt_real s_max)
@@ -152,11 +157,12 @@ void mvt_body_visibility(mvt_tracker_t *self, const mvt_view_t *view, int k)
         }
     }
     int16_t js[MVT_MAX_TARGETS];
-    const int n = hiders(self, k, js);
+    mvt_real prob[MVT_MAX_TARGETS];
+    const int n = hiders(self, k, js, prob);
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         ws->on_bg[t] = (uint8_t)(ws->pd[t] > MVT_R(0.0) && mvt_body_head_on_background(self, view, k, &self->pred[t]));
         if (ws->pd[t] > MVT_R(0.0) && !ws->on_bg[t]) {
-            ws->pd[t] *= shown_among(self, k, ws->axis[k][t], t, js, n);
+            ws->pd[t] *= shown_among(self, k, ws->axis[k][t], t, js, prob, n);
         }
     }
 }
