@@ -8,6 +8,43 @@ static int feasible(mvt_real c)
     return c >= MVT_R(0.0) && isfinite(c);
 }
 
+/* Column j after a search step of delta: the potentials of a column in the tree and its row move,
+ * any other column's distance shrinks. */
+static inline void shift(mvt_assoc_ws_t *ws, int j, mvt_real delta)
+{
+    if (ws->used[j]) {
+        ws->u[ws->p[j]] += delta;
+        ws->v[j] -= delta;
+    } else {
+        ws->minv[j] -= delta;
+    }
+}
+
+/* The augmenting path found, ending at free column j0, flipped along its way[] links. */
+static void augment(mvt_assoc_ws_t *ws, int j0)
+{
+    do {
+        const int j1 = ws->way[j0];
+        ws->p[j0] = ws->p[j1];
+        j0 = j1;
+    } while (j0 != 0);
+}
+
+/* The columns' rows (ws->p) as each row's column; -1 where it holds a forbidden entry. */
+static void matching(const mvt_real *cost, int n_rows, int n_cols, int stride, const mvt_assoc_ws_t *ws,
+                     int *row_to_col)
+{
+    for (int r = 0; r < n_rows; r++) {
+        row_to_col[r] = -1;
+    }
+    for (int j = 1; j <= n_cols; j++) {
+        const int i = ws->p[j];
+        if (i > 0 && feasible(cost[(i - 1) * stride + (j - 1)])) {
+            row_to_col[i - 1] = j - 1;
+        }
+    }
+}
+
 mvt_err_t mvt_assoc_solve(const mvt_real *cost, int n_rows, int n_cols, int stride, int *row_to_col,
                           mvt_assoc_ws_t *ws)
 {
@@ -68,30 +105,13 @@ mvt_err_t mvt_assoc_solve(const mvt_real *cost, int n_rows, int n_cols, int stri
                 return MVT_ERR_NUMERIC; /* only with non-finite arithmetic; cannot happen otherwise */
             }
             for (int j = 0; j <= n_cols; j++) {
-                if (ws->used[j]) {
-                    ws->u[ws->p[j]] += delta;
-                    ws->v[j] -= delta;
-                } else {
-                    ws->minv[j] -= delta;
-                }
+                shift(ws, j, delta);
             }
             j0 = j1;
         } while (ws->p[j0] != 0);
-        do {
-            const int j1 = ws->way[j0];
-            ws->p[j0] = ws->p[j1];
-            j0 = j1;
-        } while (j0 != 0);
+        augment(ws, j0);
     }
-    for (int r = 0; r < n_rows; r++) {
-        row_to_col[r] = -1;
-    }
-    for (int j = 1; j <= n_cols; j++) {
-        const int i = ws->p[j];
-        if (i > 0 && feasible(cost[(i - 1) * stride + (j - 1)])) {
-            row_to_col[i - 1] = j - 1;
-        }
-    }
+    matching(cost, n_rows, n_cols, stride, ws, row_to_col);
     return MVT_OK;
 }
 
@@ -173,23 +193,13 @@ mvt_err_t mvt_assoc_solve_own(const mvt_real *cost, int n_rows, int n_cols, int 
             if (j1 == 0) {
                 return MVT_ERR_NUMERIC; /* only with non-finite arithmetic; cannot happen otherwise */
             }
-            ws->u[ws->p[0]] += delta; /* column 0, the search's start, is always used */
+            shift(ws, 0, delta); /* column 0, the search's start, is always used */
             for (int q = 0; q < n; q++) {
-                const int j = ws->reached[q];
-                if (ws->used[j]) {
-                    ws->u[ws->p[j]] += delta;
-                    ws->v[j] -= delta;
-                } else {
-                    ws->minv[j] -= delta;
-                }
+                shift(ws, ws->reached[q], delta);
             }
             j0 = j1;
         } while (ws->p[j0] != 0);
-        do {
-            const int j1 = ws->way[j0];
-            ws->p[j0] = ws->p[j1];
-            j0 = j1;
-        } while (j0 != 0);
+        augment(ws, j0);
         for (int q = 0; q < n; q++) { /* back to the state a new search starts from */
             const int j = ws->reached[q];
             ws->minv[j] = inf;
@@ -198,14 +208,6 @@ mvt_err_t mvt_assoc_solve_own(const mvt_real *cost, int n_rows, int n_cols, int 
         }
         ws->used[0] = 0;
     }
-    for (int r = 0; r < n_rows; r++) {
-        row_to_col[r] = -1;
-    }
-    for (int j = 1; j <= n_cols; j++) {
-        const int i = ws->p[j];
-        if (i > 0 && feasible(cost[(i - 1) * stride + (j - 1)])) {
-            row_to_col[i - 1] = j - 1;
-        }
-    }
+    matching(cost, n_rows, n_cols, stride, ws, row_to_col);
     return MVT_OK;
 }
