@@ -191,13 +191,17 @@ int mvt_body_fragment_possible(const mvt_tracker_t *self, int k, int t)
     return tr->id != 0 && !tr->dormant && tr->exist_lo > MVT_R(0.0) && self->body.axis[k][t][4] > MVT_R(0.0);
 }
 
-mvt_real mvt_body_fragment_density(const mvt_tracker_t *self, int k, int t, const mvt_real uv[2])
+mvt_real mvt_body_fragment_scale(const mvt_tracker_t *self, int k, int t)
 {
-    const mvt_real *axis = self->body.axis[k][t];
-    if (!mvt_body_fragment_possible(self, k, t) || !mvt_body_fragment_of(axis, uv)) {
+    if (!mvt_body_fragment_possible(self, k, t)) {
         return MVT_R(0.0);
     }
-    return mvt_body_prob(self->tracks[t].exist_lo) * self->frag_n[k] / mvt_body_silhouette_area(axis);
+    return mvt_body_prob(self->tracks[t].exist_lo) * self->frag_n[k] / mvt_body_silhouette_area(self->body.axis[k][t]);
+}
+
+mvt_real mvt_body_fragment_density(const mvt_tracker_t *self, int k, int t, const mvt_real uv[2])
+{
+    return mvt_body_fragment_of(self->body.axis[k][t], uv) ? mvt_body_fragment_scale(self, k, t) : MVT_R(0.0);
 }
 
 int mvt_body_on_silhouette(const mvt_real axis[MVT_BODY_AXIS_N], const mvt_real uv[2], mvt_real slack_px)

@@ -176,6 +176,8 @@ mvt_real mvt_body_silhouette_area(const mvt_real axis[MVT_BODY_AXIS_N]);
  * uv: its fragments per frame (the camera's learnt rate) over its silhouette's area, times its
  * existence; 0 off the silhouette. O(1). */
 mvt_real mvt_body_fragment_density(const mvt_tracker_t *self, int k, int t, const mvt_real uv[2]);
+/* That density where uv lies on the silhouette: 0 where the body may have no fragments. O(1). */
+mvt_real mvt_body_fragment_scale(const mvt_tracker_t *self, int k, int t);
 /* Track t's body may have fragments in camera k (it is tracked, awake, likely present and shows
  * there): mvt_body_fragment_density is 0 everywhere otherwise. */
 int mvt_body_fragment_possible(const mvt_tracker_t *self, int k, int t);

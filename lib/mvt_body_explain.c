@@ -131,13 +131,11 @@ void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k)
     mvt_real fscale[MVT_MAX_TARGETS];
     int nf = 0;
     for (int i = 0; i < nr; i++) {
-        const mvt_real *axis = ws->axis[k][rows[i]];
-        if (!mvt_body_fragment_possible(self, k, rows[i])) {
-            continue;
+        if (mvt_body_fragment_possible(self, k, rows[i])) {
+            fbody[nf] = rows[i];
+            fscale[nf] = mvt_body_fragment_scale(self, k, rows[i]);
+            nf++;
         }
-        fbody[nf] = rows[i];
-        fscale[nf] = mvt_body_prob(self->tracks[rows[i]].exist_lo) * self->frag_n[k] / mvt_body_silhouette_area(axis);
-        nf++;
     }
     for (int d = 0; d < nd; d++) {
         ws->frag_dens[d] = MVT_R(0.0);
