@@ -265,12 +265,12 @@ int mvt_body_feet_visible(const mvt_tracker_t *self, int k, const mvt_detection_
         return 0;
     }
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
-        const mvt_track_t *tr = &self->tracks[t];
         const mvt_real *s = self->body.sil[k][t];
-        if (t == self_t || tr->id == 0 || !(tr->exist_lo > MVT_R(0.0)) || !(s[2] > s[0])) {
-            continue;
+        if (!(s[2] > s[0]) || !boxes_overlap(b, s)) {
+            continue; /* first the boxes: most bodies are elsewhere in the picture */
         }
-        if (boxes_overlap(b, s)) {
+        const mvt_track_t *tr = &self->tracks[t];
+        if (t != self_t && tr->id != 0 && tr->exist_lo > MVT_R(0.0)) {
             return 0;
         }
     }
@@ -320,7 +320,9 @@ mvt_err_t mvt_body_feet_innovation(const mvt_tracker_t *self, const mvt_cv_state
     p.hph[0] = hp[0][0] * p.H[0] + hp[0][1] * p.H[1];
     p.hph[1] = hp[0][0] * p.H[3] + hp[0][1] * p.H[4];
     p.hph[2] = hp[1][0] * p.H[3] + hp[1][1] * p.H[4];
-    const mvt_real spread_px = cam->fx * self->cfg.body.foot_sd_m / p.depth_m;
+    /* the feet's spread about that point: the camera's learnt one, else the body's prior */
+    const mvt_real sd = self->foot_var_k[k] > MVT_R(0.0) ? MVT_SQRT(self->foot_var_k[k]) : self->cfg.body.foot_sd_m;
+    const mvt_real spread_px = cam->fx * sd / p.depth_m;
     mvt_pkf_meas_t m;
     err = mvt_pkf_meas_make(cam, uv, MVT_SQRT(cam->sigma_px * cam->sigma_px + spread_px * spread_px), &m);
     if (err != MVT_OK) {

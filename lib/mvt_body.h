@@ -27,7 +27,8 @@
  *                 tracked silhouette past its head, or by its feet, is that body's fragment when
  *                 its fragment density beats clutter; a head in another body's blob is hosted;
  *                 a shown head no blob reports is the mask's top in its column; the rest unexplained
- *     update      mvt_body_update.c: a head (a blob's, or the mask's top) updates its track (PKF);
+ *     update      mvt_body_update.c: a head (a blob's, or the mask's top) updates its track (PKF),
+ *                 weighed by its blob's bottom where that shows the feet, which then update it too;
  *                 a hosted head's column stays in its host's box, whose edges that only its body
  *                 makes measure it; the existence takes the camera's evidence: detected (against
  *                 clutter and other bodies' fragments), hosted (with the merged box's edges), missed with a fragment
@@ -37,8 +38,8 @@
  *                triangulated, update the track as one point; the update step above then placed
  *                heads without updating, and left the mask's tops, the hosts' edges and the feet
  *                (per-view pixel measurements, the projective filter's) out
- *   one view     mvt_body_update.c: a track one camera alone placed takes its blob's visible feet;
- *                a track fewer than two placed keeps the person's height (the last two views gave)
+ *   one view     mvt_body_update.c: a track fewer than two views placed keeps the person's height
+ *                (the last two views gave); each camera learns its feet from people two views placed
  *   birth        mvt_body_birth.c: each unexplained blob is the seed of a candidate: its head ray
  *                with the prior on head height, its feet where visible, then every other camera's
  *                unexplained blobs (or their absence where the head would show); a candidate is
@@ -95,15 +96,24 @@
 /* A blob's lowest point is the body's point on the floor nearest the camera: this far (m) from the
  * head's vertical toward the camera. Legs and feet are narrower than shoulders, so for a standing
  * or walking person it is less than the body's half width. Learnt per camera from the feet of
- * people whom two views place (whose head does not rest on the feet): the running mean of the
+ * people whom two views place (their heads fix the place): the running mean of the
  * offset of the feet's floor point along the camera's direction, MVT_BODY_FOOT_AHEAD_N samples
  * long, from this prior and within 0..MVT_BODY_FOOT_AHEAD_MAX_M. */
 #define MVT_BODY_FOOT_AHEAD_M MVT_R(0.1)
 #define MVT_BODY_FOOT_AHEAD_MAX_M MVT_R(0.4)
 #define MVT_BODY_FOOT_AHEAD_N MVT_R(200.0)
+/* The same samples' spread about that mean is the feet's spread in that camera (a stride, a shadow,
+ * the detector's edge), from the body's prior foot_sd_m, within MVT_BODY_FOOT_SD_MIN_M (a foot's
+ * own size) and MVT_BODY_FOOT_AHEAD_MAX_M. */
+#define MVT_BODY_FOOT_SD_MIN_M MVT_R(0.03)
 /* The probability that a blob's bottom, where nothing cuts it, is the person's feet (not a shadow,
- * a blob merged with the floor's reflection, legs the colour of the floor). */
+ * a blob merged with the floor's reflection, legs the colour of the floor): the prior of each
+ * camera's rate, learnt from the same people as the share of their bottoms that land within
+ * -MVT_BODY_FOOT_AHEAD_MAX_M..2 MVT_BODY_FOOT_AHEAD_MAX_M of their head's vertical, never under
+ * MVT_BODY_P_FEET_MIN (clothes the colour of the floor in every view may hide most feet) nor over
+ * MVT_BODY_PD_MAX. */
 #define MVT_BODY_P_FEET MVT_R(0.9)
+#define MVT_BODY_P_FEET_MIN MVT_R(0.05)
 /* A blob's box within this many pixels of the picture's edge is cut by it. */
 #define MVT_BODY_EDGE_PX MVT_R(2.0)
 /* A merged blob's edge that one body's silhouette alone puts there measures that edge of the body

@@ -10,21 +10,23 @@
  * prior of a displaced point raised to 1 - (p / p_detect) (1 - p_outlier): such a blob's top is
  * more often where the nearer body's outline ends, or the merged region's, than the head. How often
  * hidden heads still show is learnt per camera (learn_detection).
+ * The feet: where the blob's bottom shows them (feet_shown: visible, the body standing in the
+ * picture, nothing of it below the blob), it weighs whether the top is the head or displaced
+ * (feet_ratio: a displaced blob carries its bottom with its top, or its bottom is the body's feet
+ * where the estimate puts them; the person's own head and feet move together as the estimate's
+ * error says) and, the head taken, measures the body's point on the floor nearest the camera
+ * (update_feet). Each camera learns from people two views place (learn_feet) how far that point
+ * lies ahead of the head's vertical, how widely bottoms scatter about it and how often a bottom is
+ * the feet at all, and the feet weigh accordingly. They fix the distance along the head's ray,
+ * which one view leaves open and a view's burst can slide.
  * After every camera (mvt_body_regather), a track whose heads in three or more views agree on one
  * point beyond its gate, two or more of them judged displaced and one placing it, starts again at
  * that point: independent displacements do not agree, and one view's distance along its ray (the
- * height prior's, or feet a box misplaced) was wrong. Then (mvt_body_one_view) a track whose head
- * one camera alone placed this frame takes that blob's feet where they are visible
- * (mvt_body_feet_visible: not cut by the picture, no other body's silhouette on the blob, the head
- * not judged displaced): the body's point on the floor nearest the camera, the camera's learnt
- * distance ahead of the head's vertical (learn_feet, from people two views place). With the head's
- * ray they fix the distance along it, which is what one view leaves open; where two or more views
- * place the head, their rays do, and feet (whose offset from the head's vertical is a body's, not a
- * pixel's) measured worse there (docs/tracking.md). The person's height is the head's height the
- * last frame two views placed it (or its birth's); a person shown before whom one view places takes
- * it as a measurement of the head's (a walking head's bob about it), and any other track fewer than
- * two views place keeps its head within MVT_BODY_HEIGHT_BAND spreads of it (a truncation): one
- * view's update slides the head along the ray, and the height with it.
+ * height prior's, or feet a box misplaced) was wrong. Then (mvt_body_one_view) the person's height:
+ * the head's height the last frame two views placed it (or its birth's); a person shown before whom
+ * one view places takes it as a measurement of the head's (a walking head's bob about it), and any
+ * other track fewer than two views place keeps its head within MVT_BODY_HEIGHT_BAND spreads of it
+ * (a truncation): one view's update slides the head along the ray, and the height with it.
  * Existence (the integrated PDA's recursion with this camera's detection probability p):
  *   head detected with density N (its own, or    odds *= 1 - p + p N / (lambda + phi), phi the
  *   displaced: mvt_body_head_density)            density of other bodies' fragments at the blob
@@ -60,34 +62,104 @@
 #include <math.h>
 #include <stddef.h>
 
-/* Camera k's visible feet of track t's blob d, as a measurement of the point under the head. */
-static void update_feet(mvt_tracker_t *self, mvt_track_t *tr, int t, int k, const mvt_detection_t *det)
+/* How often camera k's blob bottoms where feet may show are the feet (learn_feet). */
+static mvt_real p_feet(const mvt_tracker_t *self, int k)
 {
-    mvt_real uv[2];
-    mvt_pkf_innov_t in;
-    if (!mvt_body_feet_visible(self, k, det, t, uv) || mvt_body_feet_innovation(self, &tr->s, k, uv, &in) != MVT_OK ||
-        !(in.d2 <= self->cfg.numerics.gate_chi2)) {
+    return self->p_feet_k[k] > MVT_R(0.0) ? self->p_feet_k[k] : MVT_BODY_P_FEET;
+}
+
+/* The body with axis ax goes on below blob det's bottom (a hole or a band of background cut it):
+ * another blob tops a piece of it lower down, or the mask shows foreground on its axis between
+ * that bottom and the feet (a half width above them, where a shadow may join). */
+static int body_below(const mvt_view_t *view, const mvt_real ax[MVT_BODY_AXIS_N], const mvt_detection_t *det)
+{
+    const mvt_real v0 = det->box[3] + MVT_BODY_EDGE_PX, v1 = ax[3] - ax[4];
+    if (!(v1 > v0)) {
+        return 0;
+    }
+    for (int d = 0; d < view->num_detections; d++) {
+        const mvt_detection_t *o = &view->det[d];
+        const mvt_real uv[2] = {o->u, o->v};
+        if (o != det && o->v > v0 && o->v < v1 && mvt_body_on_silhouette(ax, uv, MVT_R(0.0))) {
+            return 1;
+        }
+    }
+    const struct mvt_mask *m = view->mask;
+    if (m == NULL || m->width == 0) {
+        return 0;
+    }
+    const mvt_real slope = (ax[2] - ax[0]) / (ax[3] - ax[1]);
+    const mvt_real step = (mvt_real)m->scale;
+    for (mvt_real v = v0 + step; v < v1; v += step) {
+        const mvt_real uv[2] = {ax[0] + slope * (v - ax[1]), v};
+        if (mvt_mask_fg_near(m, uv, step)) {
+            return 1;
+        }
+    }
+    return 0;
+}
+
+/* Whether camera k's blob det, track t's head, shows the feet at its bottom (uv: the box's bottom
+ * centre): they are visible (mvt_body_feet_visible: not cut by the picture or furniture, no other
+ * body on the blob), the body stands in the picture (its floor point lower than its head by more
+ * than its width; seen from above, the blob's lowest point is a shoulder's rim) and does not go on
+ * below the blob (body_below). */
+static int feet_shown(const mvt_tracker_t *self, const mvt_view_t *view, int t, int k, const mvt_detection_t *det,
+                      mvt_real uv[2])
+{
+    const mvt_real *ax = self->body.axis[k][t];
+    const mvt_real *sil = self->body.sil[k][t];
+    return ax[3] - ax[1] > MVT_R(2.0) * ax[4] && sil[2] > sil[0] && mvt_body_feet_visible(self, k, det, t, uv) &&
+           !body_below(view, ax, det);
+}
+
+/* The feet at uv as a measurement of track t's body (mvt_body_feet_innovation). Across, the box's
+ * bottom centre is the centre of the silhouette's box, which for a body slanted in the picture lies
+ * between its head and its feet: the innovation is taken against it. */
+static int feet_innovation(const mvt_tracker_t *self, const mvt_track_t *tr, int t, int k, const mvt_real uv[2],
+                           mvt_pkf_innov_t *in)
+{
+    const mvt_real *ax = self->body.axis[k][t];
+    const mvt_real *sil = self->body.sil[k][t];
+    if (mvt_body_feet_innovation(self, &tr->s, k, uv, in) != MVT_OK) {
+        return 0;
+    }
+    in->y[0] -= MVT_R(0.5) * (sil[0] + sil[2]) - ax[2];
+    const mvt_real det = in->S[0] * in->S[2] - in->S[1] * in->S[1];
+    in->d2 = (in->S[2] * in->y[0] * in->y[0] - MVT_R(2.0) * in->S[1] * in->y[0] * in->y[1] +
+              in->S[0] * in->y[1] * in->y[1]) / det;
+    return det > MVT_R(0.0);
+}
+
+/* Track t's feet in camera k (f: their innovation before the head's update moved the estimate
+ * from x0) update it, inside the gate, as the body's point with the camera's learnt rate of bottoms
+ * that are feet (else anywhere within the outlier radius). The innovation is carried to the
+ * updated estimate along its Jacobian: the feet's rows do not change over a head's update. */
+static void update_feet(mvt_tracker_t *self, mvt_track_t *tr, int k, const mvt_pkf_innov_t *f, const mvt_real x0[3])
+{
+    mvt_pkf_innov_t in = *f;
+    const mvt_real dx[3] = {tr->s.x[0] - x0[0], tr->s.x[1] - x0[1], tr->s.x[2] - x0[2]};
+    const mvt_real *P = tr->s.P;
+    mvt_real hp[2][3];
+    for (int r = 0; r < 2; r++) {
+        const mvt_real *H = &in.H[r * 3];
+        in.y[r] -= H[0] * dx[0] + H[1] * dx[1] + H[2] * dx[2];
+        for (int c = 0; c < 3; c++) {
+            hp[r][c] = H[0] * P[0 * 6 + c] + H[1] * P[1 * 6 + c] + H[2] * P[2 * 6 + c];
+        }
+    }
+    in.S[0] = hp[0][0] * in.H[0] + hp[0][1] * in.H[1] + hp[0][2] * in.H[2] + in.r;
+    in.S[1] = hp[0][0] * in.H[3] + hp[0][1] * in.H[4] + hp[0][2] * in.H[5];
+    in.S[2] = hp[1][0] * in.H[3] + hp[1][1] * in.H[4] + hp[1][2] * in.H[5] + in.r;
+    const mvt_real det = in.S[0] * in.S[2] - in.S[1] * in.S[1];
+    in.d2 = (in.S[2] * in.y[0] * in.y[0] - MVT_R(2.0) * in.S[1] * in.y[0] * in.y[1] + in.S[0] * in.y[1] * in.y[1]) / det;
+    if (!(det > MVT_R(0.0)) || !(in.d2 <= self->cfg.numerics.gate_chi2)) {
         return;
     }
-    if (mvt_trk_update_pixels(self, tr, &in) == MVT_OK) {
+    if (mvt_trk_update_pixels_robust(self, tr, &in, MVT_R(1.0) - p_feet(self, k)) == MVT_OK) {
         self->counters.foot_updates++;
     } else {
         self->counters.numeric_faults++;
-    }
-}
-
-/* Track t, placed by one camera this frame: that blob's visible feet. */
-static void feet_of_one_view(mvt_tracker_t *self, mvt_track_t *tr, int t, const mvt_frame_t *frame)
-{
-    for (int k = 0; k < self->num_cameras; k++) {
-        if (!(tr->cameras_used & (1u << k)) || !(tr->view[k].p < MVT_R(0.5))) {
-            continue; /* not this camera's, or its blob was judged displaced */
-        }
-        for (int d = 0; d < self->num_meas[k]; d++) {
-            if (self->body.head_of[k][d] == t) {
-                update_feet(self, tr, t, k, &frame->views[k].det[d]);
-            }
-        }
     }
 }
 
@@ -103,7 +175,7 @@ static void learn_feet(mvt_tracker_t *self, const mvt_track_t *tr, int t, const 
         const mvt_camera_t *cam = &self->cams[k];
         for (int d = 0; d < self->num_meas[k]; d++) {
             mvt_real uv[2], o[3], dir[3];
-            if (self->body.head_of[k][d] != t || !mvt_body_feet_visible(self, k, &frame->views[k].det[d], t, uv) ||
+            if (self->body.head_of[k][d] != t || !feet_shown(self, &frame->views[k], t, k, &frame->views[k].det[d], uv) ||
                 mvt_cam_ray(cam, uv, o, dir) != MVT_OK || !(dir[2] < MVT_R(-1e-3))) {
                 continue;
             }
@@ -115,11 +187,21 @@ static void learn_feet(mvt_tracker_t *self, const mvt_track_t *tr, int t, const 
                 continue;
             }
             const mvt_real ahead = (g[0] * to_cam[0] + g[1] * to_cam[1]) / n;
-            if (!(ahead > -MVT_BODY_FOOT_AHEAD_MAX_M) || !(ahead < MVT_R(2.0) * MVT_BODY_FOOT_AHEAD_MAX_M)) {
-                continue; /* not this body's feet (another's legs, a shadow): no sample */
+            const int feet = ahead > -MVT_BODY_FOOT_AHEAD_MAX_M && ahead < MVT_R(2.0) * MVT_BODY_FOOT_AHEAD_MAX_M;
+            const mvt_real pp = p_feet(self, k);
+            const mvt_real np = pp + ((feet ? MVT_R(1.0) : MVT_R(0.0)) - pp) / MVT_BODY_FOOT_AHEAD_N;
+            self->p_feet_k[k] = np < MVT_BODY_P_FEET_MIN ? MVT_BODY_P_FEET_MIN : (np > MVT_BODY_PD_MAX ? MVT_BODY_PD_MAX : np);
+            if (!feet) {
+                continue; /* not this body's feet (another's legs, a shadow, a cut): no sample */
             }
             mvt_real *f = &self->foot_ahead_k[k];
             const mvt_real prev = *f > MVT_R(0.0) ? *f : MVT_BODY_FOOT_AHEAD_M;
+            const mvt_real sd0 = self->cfg.body.foot_sd_m;
+            const mvt_real pv = self->foot_var_k[k] > MVT_R(0.0) ? self->foot_var_k[k] : sd0 * sd0;
+            const mvt_real nv = pv + ((ahead - prev) * (ahead - prev) - pv) / MVT_BODY_FOOT_AHEAD_N;
+            const mvt_real lo = MVT_BODY_FOOT_SD_MIN_M * MVT_BODY_FOOT_SD_MIN_M;
+            const mvt_real hi = MVT_BODY_FOOT_AHEAD_MAX_M * MVT_BODY_FOOT_AHEAD_MAX_M;
+            self->foot_var_k[k] = nv < lo ? lo : (nv > hi ? hi : nv);
             mvt_real next = prev + (ahead - prev) / MVT_BODY_FOOT_AHEAD_N;
             next = next < MVT_R(1e-3) ? MVT_R(1e-3)
                                       : (next > MVT_BODY_FOOT_AHEAD_MAX_M ? MVT_BODY_FOOT_AHEAD_MAX_M : next);
@@ -251,9 +333,6 @@ void mvt_body_one_view(mvt_tracker_t *self, const mvt_frame_t *frame)
             tr->seen_zz = tr->s.P[14];
             learn_feet(self, tr, t, frame);
             continue;
-        }
-        if (mvt_trk_popcount(tr->cameras_used) == 1 && self->cfg.filter == MVT_FILTER_PROJECTIVE) {
-            feet_of_one_view(self, tr, t, frame);
         }
         if (tr->cameras_used != 0u && tr->was_shown) {
             /* one view placed a person shown before: their height is a measurement of the head's
@@ -657,6 +736,71 @@ static void learn_detection(mvt_tracker_t *self, int k, int masked, mvt_real dt)
     self->p_detect_k[k] = p;
 }
 
+/* 2-D Gaussian density of e under the packed covariance (xx xy yy); 0 where it is not positive. */
+static mvt_real gauss2(const mvt_real e[2], const mvt_real S[3])
+{
+    const mvt_real det = S[0] * S[2] - S[1] * S[1];
+    if (!(det > MVT_R(0.0)) || !(S[0] > MVT_R(0.0))) {
+        return MVT_R(0.0);
+    }
+    const mvt_real d2 = (S[2] * e[0] * e[0] - MVT_R(2.0) * S[1] * e[0] * e[1] + S[0] * e[1] * e[1]) / det;
+    return MVT_EXP(MVT_R(-0.5) * d2) / (MVT_R(6.283185307179586) * MVT_SQRT(det));
+}
+
+/* What the blob's bottom (feet_shown; fp: the feet's innovation) says of whether its top is track
+ * t's head (h: the head's innovation) or displaced, as a likelihood ratio. A head that is the person's has them where the same error of the estimate puts them: the feet's
+ * innovation given the head's is Gaussian with mean C^T S_h^-1 y_h and covariance S_f - C^T S_h^-1 C
+ * (C = H_h P H_f^T, the estimate's error seen by both). A displaced head is either a whole blob
+ * displaced (an occluder's burst, a misplaced segment: its bottom moved by the head's offset, to
+ * both points' noise) or a top that is not the head (the bottom is the body's feet, where the
+ * estimate puts them), equally likely; and any bottom may not be the feet at all (legs cut by
+ * clothes the colour of the background, a shadow), with the camera's learnt probability
+ * (learn_feet), anywhere in the picture. */
+static mvt_real feet_ratio(const mvt_tracker_t *self, const mvt_track_t *tr, int k, const mvt_pkf_innov_t *h,
+                           const mvt_pkf_innov_t *fp)
+{
+    const mvt_pkf_innov_t f = *fp;
+    const mvt_real *P = tr->s.P;
+    mvt_real hp[2][3];
+    for (int r = 0; r < 2; r++) {
+        for (int c = 0; c < 3; c++) {
+            hp[r][c] = h->H[r * 3 + 0] * P[0 * 6 + c] + h->H[r * 3 + 1] * P[1 * 6 + c] + h->H[r * 3 + 2] * P[2 * 6 + c];
+        }
+    }
+    mvt_real C[2][2]; /* C[r][q] = (H_h P H_f^T)[r][q] */
+    for (int r = 0; r < 2; r++) {
+        for (int q = 0; q < 2; q++) {
+            C[r][q] = hp[r][0] * f.H[q * 3 + 0] + hp[r][1] * f.H[q * 3 + 1] + hp[r][2] * f.H[q * 3 + 2];
+        }
+    }
+    const mvt_real dh = h->S[0] * h->S[2] - h->S[1] * h->S[1];
+    if (!(dh > MVT_R(0.0))) {
+        return MVT_R(1.0);
+    }
+    const mvt_real Si[3] = {h->S[2] / dh, -h->S[1] / dh, h->S[0] / dh};
+    /* G = C^T S_h^-1 (2x2) */
+    mvt_real G[2][2];
+    for (int q = 0; q < 2; q++) {
+        G[q][0] = C[0][q] * Si[0] + C[1][q] * Si[1];
+        G[q][1] = C[0][q] * Si[1] + C[1][q] * Si[2];
+    }
+    const mvt_real e_own[2] = {f.y[0] - (G[0][0] * h->y[0] + G[0][1] * h->y[1]),
+                               f.y[1] - (G[1][0] * h->y[0] + G[1][1] * h->y[1])};
+    const mvt_real S_own[3] = {f.S[0] - (G[0][0] * C[0][0] + G[0][1] * C[1][0]),
+                               f.S[1] - (G[0][0] * C[0][1] + G[0][1] * C[1][1]),
+                               f.S[2] - (G[1][0] * C[0][1] + G[1][1] * C[1][1])};
+    const mvt_real e_rigid[2] = {f.y[0] - h->y[0], f.y[1] - h->y[1]};
+    const mvt_real S_rigid[3] = {f.S[0] + h->S[0] - MVT_R(2.0) * C[0][0], f.S[1] + h->S[1] - C[0][1] - C[1][0],
+                                 f.S[2] + h->S[2] - MVT_R(2.0) * C[1][1]};
+    const mvt_camera_t *cam = &self->cams[k];
+    const mvt_real pf = p_feet(self, k);
+    const mvt_real anywhere = (MVT_R(1.0) - pf) / ((mvt_real)cam->width * (mvt_real)cam->height);
+    const mvt_real own = pf * gauss2(e_own, S_own) + anywhere;
+    const mvt_real displaced = pf * MVT_R(0.5) * (gauss2(e_rigid, S_rigid) + gauss2(f.y, f.S)) + anywhere;
+    const mvt_real lr = own / displaced;
+    return isfinite(lr) && lr > MVT_R(0.0) ? lr : MVT_R(1.0);
+}
+
 void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_real dt)
 {
     learn_detection(self, k, view->mask != NULL && view->mask->width > 0, dt);
@@ -716,7 +860,18 @@ void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_rea
              * nearer body's outline ends, or the merged region's) */
             const mvt_real pk = self->p_detect_k[k];
             if (projective) {
-                err = mvt_trk_update_head(self, tr, k, &in, NULL, pk > MVT_R(0.0) && p < pk ? p / pk : MVT_R(1.0));
+                /* the blob's bottom, where it shows the feet, weighs whether its top is the head
+                 * (feet_ratio) and, if so, measures the feet */
+                mvt_real fuv[2];
+                mvt_pkf_innov_t fin;
+                const int feet = feet_shown(self, view, t, k, &view->det[d], fuv) &&
+                                 feet_innovation(self, tr, t, k, fuv, &fin);
+                const mvt_real x0[3] = {tr->s.x[0], tr->s.x[1], tr->s.x[2]};
+                err = mvt_trk_update_head(self, tr, k, &in, NULL, pk > MVT_R(0.0) && p < pk ? p / pk : MVT_R(1.0),
+                                          feet ? feet_ratio(self, tr, k, &in, &fin) : MVT_R(1.0));
+                if (feet && err == MVT_OK && tr->view[k].p < MVT_R(0.5)) {
+                    update_feet(self, tr, k, &fin, x0);
+                }
             }
         }
         if (err != MVT_OK) {

@@ -563,7 +563,7 @@ static mvt_real continuing(const mvt_imm_config_t *c, const mvt_real *y, const m
 
 static mvt_err_t update(mvt_imm_t *imm, const mvt_imm_config_t *c, int m, const mvt_real *H, const mvt_real *y,
                         const mvt_real *noise, mvt_cv_state_t *s, int nb, const mvt_real *S_view,
-                        mvt_imm_view_t *view)
+                        mvt_imm_view_t *view, mvt_real own_lr)
 {
     MVT_ASSERT(m == 2 || m == 3);
     const int n = c->n;
@@ -587,7 +587,7 @@ static mvt_err_t update(mvt_imm_t *imm, const mvt_imm_config_t *c, int m, const 
     /* ... or, with the view's memory, displaced as in its last detection (continuing) */
     mvt_real p_cont = MVT_R(0.0);
     const mvt_real g_cont = eps > MVT_R(0.0) ? continuing(c, y, noise, S_view, view, s, &p_cont) : MVT_R(0.0);
-    const mvt_real right = (MVT_R(1.0) - eps) * (MVT_R(1.0) - p_cont);
+    const mvt_real right = (MVT_R(1.0) - eps) * (MVT_R(1.0) - p_cont) * own_lr;
     const mvt_real clutter =
         eps > MVT_R(0.0)
             ? eps * (MVT_R(1.0) - p_cont) / (MVT_R(3.14159265358979) * c->outlier_radius_px * c->outlier_radius_px) +
@@ -630,19 +630,26 @@ static mvt_err_t update(mvt_imm_t *imm, const mvt_imm_config_t *c, int m, const 
 mvt_err_t mvt_imm_update(mvt_imm_t *imm, const mvt_imm_config_t *c, int m, const mvt_real *H, const mvt_real *y,
                          const mvt_real *noise, mvt_cv_state_t *s)
 {
-    return update(imm, c, m, H, y, noise, s, 6, NULL, NULL);
+    return update(imm, c, m, H, y, noise, s, 6, NULL, NULL, MVT_R(1.0));
 }
 
 mvt_err_t mvt_imm_update_pos(mvt_imm_t *imm, const mvt_imm_config_t *c, int m, const mvt_real *H, const mvt_real *y,
                              const mvt_real *noise, mvt_cv_state_t *s)
 {
-    return update(imm, c, m, H, y, noise, s, 3, NULL, NULL);
+    return update(imm, c, m, H, y, noise, s, 3, NULL, NULL, MVT_R(1.0));
 }
 
 mvt_err_t mvt_imm_update_view(mvt_imm_t *imm, const mvt_imm_config_t *c, const mvt_real *H, const mvt_real *y,
                               const mvt_real *noise, const mvt_real S[3], mvt_imm_view_t *view, mvt_cv_state_t *s)
 {
-    return update(imm, c, 2, H, y, noise, s, 3, S, view);
+    return update(imm, c, 2, H, y, noise, s, 3, S, view, MVT_R(1.0));
+}
+
+mvt_err_t mvt_imm_update_view_lr(mvt_imm_t *imm, const mvt_imm_config_t *c, const mvt_real *H, const mvt_real *y,
+                                 const mvt_real *noise, const mvt_real S[3], mvt_imm_view_t *view, mvt_real own_lr,
+                                 mvt_cv_state_t *s)
+{
+    return update(imm, c, 2, H, y, noise, s, 3, S, view, own_lr);
 }
 
 static mvt_err_t truncate_models(mvt_imm_t *imm, const mvt_imm_config_t *c, const mvt_real H[3], mvt_real value,

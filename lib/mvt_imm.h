@@ -159,6 +159,11 @@ mvt_err_t mvt_imm_update(mvt_imm_t *imm, const mvt_imm_config_t *c, int m, const
  * p_outlier 0 it is mvt_imm_update_pos. */
 mvt_err_t mvt_imm_update_view(mvt_imm_t *imm, const mvt_imm_config_t *c, const mvt_real *H, const mvt_real *y,
                               const mvt_real *noise, const mvt_real S[3], mvt_imm_view_t *view, mvt_cv_state_t *s);
+/* The same with other evidence of the detection (the blob's bottom) weighing "the person's" against
+ * "displaced" by its likelihood ratio own_lr (> 0; 1: none). */
+mvt_err_t mvt_imm_update_view_lr(mvt_imm_t *imm, const mvt_imm_config_t *c, const mvt_real *H, const mvt_real *y,
+                                 const mvt_real *noise, const mvt_real S[3], mvt_imm_view_t *view, mvt_real own_lr,
+                                 mvt_cv_state_t *s);
 
 /* mvt_imm_predict_to and mvt_imm_update for several cameras in a row: s receives only what projecting
  * and gating the next camera read, the combined position and the position block of P (the velocity

@@ -120,6 +120,8 @@ void mvt_tracker_save(const mvt_tracker_t *self, mvt_tracker_persist_t *out)
     memcpy(out->p_hidden_k, self->p_hidden_k, sizeof(out->p_hidden_k));
     memcpy(out->p_bg_k, self->p_bg_k, sizeof(out->p_bg_k));
     memcpy(out->foot_ahead_k, self->foot_ahead_k, sizeof(out->foot_ahead_k));
+    memcpy(out->foot_var_k, self->foot_var_k, sizeof(out->foot_var_k));
+    memcpy(out->p_feet_k, self->p_feet_k, sizeof(out->p_feet_k));
     memcpy(out->frag_n, self->frag_n, sizeof(out->frag_n));
 }
 
@@ -156,6 +158,8 @@ static int tracker_state_ok(const mvt_tracker_config_t *c, const mvt_tracker_per
             !(p->p_hidden_k[k] >= MVT_R(0.0) && p->p_hidden_k[k] < MVT_R(1.0)) ||
             !(p->p_bg_k[k] >= MVT_R(0.0) && p->p_bg_k[k] < MVT_R(1.0)) ||
             !(p->foot_ahead_k[k] >= MVT_R(0.0) && p->foot_ahead_k[k] <= MVT_R(1.0)) ||
+            !(p->foot_var_k[k] >= MVT_R(0.0) && p->foot_var_k[k] <= MVT_R(1.0)) ||
+            !(p->p_feet_k[k] >= MVT_R(0.0) && p->p_feet_k[k] <= MVT_R(1.0)) ||
             !(p->frag_n[k] >= MVT_R(0.0) && p->frag_n[k] <= (mvt_real)MVT_MAX_DETECTIONS)) {
             return 0;
         }
@@ -210,6 +214,8 @@ mvt_err_t mvt_tracker_resume(mvt_tracker_t *self, const mvt_tracker_persist_t *p
     memcpy(self->p_hidden_k, p->p_hidden_k, sizeof(self->p_hidden_k));
     memcpy(self->p_bg_k, p->p_bg_k, sizeof(self->p_bg_k));
     memcpy(self->foot_ahead_k, p->foot_ahead_k, sizeof(self->foot_ahead_k));
+    memcpy(self->foot_var_k, p->foot_var_k, sizeof(self->foot_var_k));
+    memcpy(self->p_feet_k, p->p_feet_k, sizeof(self->p_feet_k));
     memcpy(self->frag_n, p->frag_n, sizeof(self->frag_n));
     return MVT_OK;
 }

@@ -348,6 +348,11 @@ typedef struct mvt_tracker {
     mvt_real foot_ahead_k[MVT_MAX_CAMERAS]; /* ... how far toward it from the head's vertical a blob's
                                                lowest point lies on the floor, m, learnt
                                                (mvt_body_update.c); 0: not yet */
+    mvt_real foot_var_k[MVT_MAX_CAMERAS]; /* ... the spread of those distances, m^2, learnt
+                                             (mvt_body_update.c); 0: not yet */
+    mvt_real p_feet_k[MVT_MAX_CAMERAS];   /* ... and the chance that a blob's bottom where feet may
+                                             show is the feet, learnt (mvt_body_update.c); 0: not
+                                             yet */
     mvt_real p_hidden_k[MVT_MAX_CAMERAS]; /* ... and the chance that a head another body hides or
                                              merges shows as a blob top of its own, learnt
                                              (mvt_body_update.c); 0: not yet */
@@ -399,6 +404,8 @@ typedef struct mvt_tracker_persist {
     mvt_real p_detect_k[MVT_MAX_CAMERAS];
     mvt_real p_hidden_k[MVT_MAX_CAMERAS];
     mvt_real foot_ahead_k[MVT_MAX_CAMERAS];
+    mvt_real foot_var_k[MVT_MAX_CAMERAS];
+    mvt_real p_feet_k[MVT_MAX_CAMERAS];
     mvt_real frag_n[MVT_MAX_CAMERAS];
     mvt_real p_bg_k[MVT_MAX_CAMERAS];
 } mvt_tracker_persist_t;

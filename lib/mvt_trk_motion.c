@@ -52,11 +52,11 @@ void mvt_trk_settle(mvt_tracker_t *self, mvt_track_t *tr)
 mvt_err_t mvt_trk_update_pkf(mvt_tracker_t *self, mvt_track_t *tr, int k, const mvt_pkf_innov_t *in,
                              const mvt_real *extra_px2)
 {
-    return mvt_trk_update_head(self, tr, k, in, extra_px2, MVT_R(1.0));
+    return mvt_trk_update_head(self, tr, k, in, extra_px2, MVT_R(1.0), MVT_R(1.0));
 }
 
 mvt_err_t mvt_trk_update_head(mvt_tracker_t *self, mvt_track_t *tr, int k, const mvt_pkf_innov_t *in,
-                              const mvt_real *extra_px2, mvt_real shown)
+                              const mvt_real *extra_px2, mvt_real shown, mvt_real own_lr)
 {
     if (single(self)) {
         return mvt_pkf_update(&tr->s, in);
@@ -76,9 +76,9 @@ mvt_err_t mvt_trk_update_head(mvt_tracker_t *self, mvt_track_t *tr, int k, const
         /* the head shows with probability `shown`; otherwise the point is another part of the body */
         mvt_imm_config_t c = self->cfg.motion;
         c.p_outlier = MVT_R(1.0) - (shown > MVT_R(0.0) ? shown : MVT_R(0.0)) * (MVT_R(1.0) - c.p_outlier);
-        return mvt_imm_update_view(&tr->imm, &c, in->H, in->y, noise, in->S, &tr->view[k], &tr->s);
+        return mvt_imm_update_view_lr(&tr->imm, &c, in->H, in->y, noise, in->S, &tr->view[k], own_lr, &tr->s);
     }
-    return mvt_imm_update_view(&tr->imm, &self->cfg.motion, in->H, in->y, noise, in->S, &tr->view[k], &tr->s);
+    return mvt_imm_update_view_lr(&tr->imm, &self->cfg.motion, in->H, in->y, noise, in->S, &tr->view[k], own_lr, &tr->s);
 }
 
 mvt_err_t mvt_trk_update_pixels(mvt_tracker_t *self, mvt_track_t *tr, const mvt_pkf_innov_t *in)
@@ -88,6 +88,17 @@ mvt_err_t mvt_trk_update_pixels(mvt_tracker_t *self, mvt_track_t *tr, const mvt_
     }
     const mvt_real noise[4] = {in->r, MVT_R(0.0), MVT_R(0.0), in->r};
     return mvt_imm_update(&tr->imm, &self->cfg.motion, 2, in->H, in->y, noise, &tr->s);
+}
+
+mvt_err_t mvt_trk_update_pixels_robust(mvt_tracker_t *self, mvt_track_t *tr, const mvt_pkf_innov_t *in, mvt_real p_out)
+{
+    if (single(self)) {
+        return mvt_pkf_update(&tr->s, in);
+    }
+    mvt_imm_config_t c = self->cfg.motion;
+    c.p_outlier = p_out > c.p_outlier ? p_out : c.p_outlier;
+    const mvt_real noise[4] = {in->r, MVT_R(0.0), MVT_R(0.0), in->r};
+    return mvt_imm_update_pos(&tr->imm, &c, 2, in->H, in->y, noise, &tr->s);
 }
 
 mvt_err_t mvt_trk_update_point(mvt_tracker_t *self, mvt_track_t *tr, const mvt_real z[3], const mvt_real R[9])

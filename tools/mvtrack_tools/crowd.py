@@ -268,6 +268,9 @@ def detect(scene: Scene, rng: np.random.Generator) -> list[list[CameraFrame | No
     rig, m = scene.rig, scene.model
     out: list[list[CameraFrame | None]] = []
     stats = {"merged_blobs": 0, "missed": 0, "false_alarms": 0, "dropped_messages": 0, "true": 0}
+    # a box's edges are blob pixels measured as the top is: each with the same pixel noise, from a
+    # generator of its own (the scene's other draws do not depend on it)
+    edge_rng = np.random.default_rng(rng.bit_generator.seed_seq.spawn(1)[0])
     for f in range(scene.n_frames):
         row: list[CameraFrame | None] = []
         t = f / rig.frame_rate
@@ -323,8 +326,11 @@ def detect(scene: Scene, rng: np.random.Generator) -> list[list[CameraFrame | No
                     stats["missed"] += 1
                     continue
                 p = b["uv"] + rng.standard_normal(2) * m.sigma_px
+                e = edge_rng.standard_normal(4) * m.sigma_px
+                box = (max(0.0, b["box"][0] + e[0]), max(0.0, b["box"][1] + e[1]),
+                       min(cam.width - 1.0, b["box"][2] + e[2]), min(cam.height - 1.0, b["box"][3] + e[3]))
                 if cam.in_image(p[None])[0]:
-                    dets.append((float(p[0]), float(p[1]), b["box"], int(b.get("top", b["gids"][0]))))
+                    dets.append((float(p[0]), float(p[1]), box, int(b.get("top", b["gids"][0]))))
                     stats["true"] += 1
             for _ in range(rng.poisson(m.fa_rate)):
                 u, v = rng.uniform(0, cam.width - 1), rng.uniform(0, cam.height - 1)

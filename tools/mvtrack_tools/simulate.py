@@ -44,10 +44,11 @@ def experiment1(rig: Rig, seconds: float, var_px2: float, occlusion: bool, seed:
     return model, states, dets
 
 
-def with_boxes(cam, head: np.ndarray, dets) -> list[tuple]:
-    """The person's blob box: the body under the head, cut by the picture. The head point's pixel
-    noise is its own (the box's edges are other pixels); a burst's displaced detection (an occlusion,
-    a bad segmentation) carries its box with it."""
+def with_boxes(cam, head: np.ndarray, dets, sd: float = 0.0, edge_rng: np.random.Generator | None = None) -> list[tuple]:
+    """The person's blob box: the body under the head, cut by the picture. The box's edges are other
+    pixels than the head point, each measured with the same pixel noise sd of its own (drawn from
+    edge_rng); a burst's displaced detection (an occlusion, a bad segmentation) carries its box with
+    it."""
     box = body_box(cam, head)
     if box is None:
         return [(u, v) for (u, v, _) in dets]
@@ -55,8 +56,9 @@ def with_boxes(cam, head: np.ndarray, dets) -> list[tuple]:
     out = []
     for (u, v, is_true) in dets:
         du, dv = (0.0, 0.0) if is_true else (u - true_uv[0], v - true_uv[1])
-        b = (max(0.0, box[0] + du), max(0.0, box[1] + dv), min(cam.width - 1.0, box[2] + du),
-             min(cam.height - 1.0, box[3] + dv))
+        e = edge_rng.standard_normal(4) * sd if edge_rng is not None and sd > 0 else np.zeros(4)
+        b = (max(0.0, box[0] + du + e[0]), max(0.0, box[1] + dv + e[1]), min(cam.width - 1.0, box[2] + du + e[2]),
+             min(cam.height - 1.0, box[3] + dv + e[3]))
         out.append((u, v, b) if b[2] > b[0] and b[3] > b[1] else (u, v))
     return out
 
@@ -65,13 +67,16 @@ def write_scene(sink, rig: Rig, states: np.ndarray, dets, var_px2: float, progre
                 frame_order_seed: int = 0) -> None:
     dt_us = int(round(1e6 / rig.frame_rate))
     rng = np.random.default_rng(frame_order_seed)
+    # the boxes' edge noise: its own generator, seeded by the scene (the cameras' order is not)
+    edge_rng = np.random.default_rng(np.frombuffer(np.ascontiguousarray(states[:2, :3], dtype=np.float64).tobytes(),
+                                                   dtype=np.uint32))
     sd = float(np.sqrt(var_px2))
     for f in progress_bar(range(len(states)), desc="frames", unit="fr", enabled=progress, leave=False):
         utime = T0_UTIME + f * dt_us
         sink.write(utime, "GROUND_TRUTH", ground_truth(utime, f, [1], states[f, :3][None]))
         for k in rng.permutation(len(rig.cameras)):  # cameras arrive in any order
             cam = rig.cameras[k]
-            msg = camera_frame(utime, f, cam, with_boxes(cam, states[f, :3], dets[f][k]), sd)
+            msg = camera_frame(utime, f, cam, with_boxes(cam, states[f, :3], dets[f][k], sd, edge_rng), sd)
             sink.write(utime, f"DETECTIONS_{cam.name}", msg)
 
 
