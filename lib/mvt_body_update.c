@@ -126,9 +126,12 @@ static int feet_innovation(const mvt_tracker_t *self, const mvt_track_t *tr, int
     }
     in->y[0] -= MVT_R(0.5) * (sil[0] + sil[2]) - ax[2];
     const mvt_real det = in->S[0] * in->S[2] - in->S[1] * in->S[1];
+    if (!(det > MVT_R(0.0))) {
+        return 0;
+    }
     in->d2 = (in->S[2] * in->y[0] * in->y[0] - MVT_R(2.0) * in->S[1] * in->y[0] * in->y[1] +
               in->S[0] * in->y[1] * in->y[1]) / det;
-    return det > MVT_R(0.0);
+    return 1;
 }
 
 /* Track t's feet in camera k (f: their innovation before the head's update moved the estimate
@@ -152,8 +155,11 @@ static void update_feet(mvt_tracker_t *self, mvt_track_t *tr, int k, const mvt_p
     in.S[1] = hp[0][0] * in.H[3] + hp[0][1] * in.H[4] + hp[0][2] * in.H[5];
     in.S[2] = hp[1][0] * in.H[3] + hp[1][1] * in.H[4] + hp[1][2] * in.H[5] + in.r;
     const mvt_real det = in.S[0] * in.S[2] - in.S[1] * in.S[1];
+    if (!(det > MVT_R(0.0))) {
+        return;
+    }
     in.d2 = (in.S[2] * in.y[0] * in.y[0] - MVT_R(2.0) * in.S[1] * in.y[0] * in.y[1] + in.S[0] * in.y[1] * in.y[1]) / det;
-    if (!(det > MVT_R(0.0)) || !(in.d2 <= self->cfg.numerics.gate_chi2)) {
+    if (!(in.d2 <= self->cfg.numerics.gate_chi2)) {
         return;
     }
     if (mvt_trk_update_pixels_robust(self, tr, &in, MVT_R(1.0) - p_feet(self, k)) == MVT_OK) {
@@ -163,9 +169,11 @@ static void update_feet(mvt_tracker_t *self, mvt_track_t *tr, int k, const mvt_p
     }
 }
 
-/* Track t, placed by two or more views this frame (its head's place owes nothing to feet): for
- * each of those views whose blob shows its feet, where the feet's ray meets the floor, ahead of the
- * head's vertical toward the camera; learnt into the camera's foot_ahead_k. */
+/* Track t, placed by two or more views this frame (their heads fix its place): for each of those
+ * views whose blob shows its feet (feet_shown), where the bottom's ray meets the floor, ahead of the
+ * head's vertical toward the camera. Within -MVT_BODY_FOOT_AHEAD_MAX_M..2 MVT_BODY_FOOT_AHEAD_MAX_M
+ * it is the feet: learnt into the camera's distance ahead (foot_ahead_k) and its spread
+ * (foot_var_k); how often it is, into the camera's rate of bottoms that are feet (p_feet_k). */
 static void learn_feet(mvt_tracker_t *self, const mvt_track_t *tr, int t, const mvt_frame_t *frame)
 {
     for (int k = 0; k < self->num_cameras; k++) {

@@ -12,7 +12,7 @@ and frame (each feature switchable, all drawn from one seeded generator):
   detector reports the top of the region: the top-most head of the group;
 - each blob is missed with probability `p_miss`;
 - false alarms: Poisson(`fa_rate`) per camera and frame, uniform over the image;
-- pixel noise N(0, sigma^2) on every reported point;
+- pixel noise N(0, sigma^2) on every reported point and on each edge of its box;
 - capture-time jitter: each camera's frame is taken up to `jitter_ms` away from the nominal
   frame time (positions are taken at the jittered time);
 - dropout: camera `dropout_cam` sends nothing during [dropout_s, dropout_s + dropout_len_s).
