@@ -101,12 +101,15 @@ void mvt_trk_predict_pos(mvt_tracker_t *self, mvt_track_t *tr, int64_t utime_us)
 mvt_err_t mvt_trk_update_pkf(mvt_tracker_t *self, mvt_track_t *tr, int k, const mvt_pkf_innov_t *in,
                              const mvt_real *extra_px2);
 /* The same for a head that shows (is not hidden behind another body) with probability `shown`
- * (0..1): the point is displaced (mvt_imm.h's impulsive noise) with prior 1 - shown (1 - p_outlier). */
+ * (0..1): the point is displaced (mvt_imm.h's impulsive noise) with prior 1 - shown (1 - p_outlier);
+ * own_lr (> 0; 1: none) is other evidence's likelihood ratio of the person's head against displaced
+ * (its blob's bottom: mvt_imm_update_view_lr). */
 mvt_err_t mvt_trk_update_head(mvt_tracker_t *self, mvt_track_t *tr, int k, const mvt_pkf_innov_t *in,
                               const mvt_real *extra_px2, mvt_real shown, mvt_real own_lr);
 void mvt_trk_settle(mvt_tracker_t *self, mvt_track_t *tr);
-/* mvt_trk_update_pixels for a point that is the body's with probability 1 - p_out (at least the
- * motion model's p_outlier), else anywhere within the outlier radius. */
+/* mvt_trk_update_pixels within a camera's pass (position only, as mvt_trk_predict_pos) for a point
+ * that is the body's with probability 1 - p_out (at least the motion model's p_outlier), else
+ * anywhere within the outlier radius. */
 mvt_err_t mvt_trk_update_pixels_robust(mvt_tracker_t *self, mvt_track_t *tr, const mvt_pkf_innov_t *in, mvt_real p_out);
 mvt_err_t mvt_trk_update_point(mvt_tracker_t *self, mvt_track_t *tr, const mvt_real z[3], const mvt_real R[9]);
 /* The triangulate-then-KF baseline's update (the paper's references [10, 18]): the views of obs
