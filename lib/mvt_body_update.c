@@ -125,13 +125,7 @@ static int feet_innovation(const mvt_tracker_t *self, const mvt_track_t *tr, int
         return 0;
     }
     in->y[0] -= MVT_R(0.5) * (sil[0] + sil[2]) - ax[2];
-    const mvt_real det = in->S[0] * in->S[2] - in->S[1] * in->S[1];
-    if (!(det > MVT_R(0.0))) {
-        return 0;
-    }
-    in->d2 = (in->S[2] * in->y[0] * in->y[0] - MVT_R(2.0) * in->S[1] * in->y[0] * in->y[1] +
-              in->S[0] * in->y[1] * in->y[1]) / det;
-    return 1;
+    return mvt_pkf_innov_d2(in) == MVT_OK;
 }
 
 /* Track t's feet in camera k (f: their innovation before the head's update moved the estimate
@@ -154,12 +148,7 @@ static void update_feet(mvt_tracker_t *self, mvt_track_t *tr, int k, const mvt_p
     in.S[0] = hp[0][0] * in.H[0] + hp[0][1] * in.H[1] + hp[0][2] * in.H[2] + in.r;
     in.S[1] = hp[0][0] * in.H[3] + hp[0][1] * in.H[4] + hp[0][2] * in.H[5];
     in.S[2] = hp[1][0] * in.H[3] + hp[1][1] * in.H[4] + hp[1][2] * in.H[5] + in.r;
-    const mvt_real det = in.S[0] * in.S[2] - in.S[1] * in.S[1];
-    if (!(det > MVT_R(0.0))) {
-        return;
-    }
-    in.d2 = (in.S[2] * in.y[0] * in.y[0] - MVT_R(2.0) * in.S[1] * in.y[0] * in.y[1] + in.S[0] * in.y[1] * in.y[1]) / det;
-    if (!(in.d2 <= self->cfg.numerics.gate_chi2)) {
+    if (mvt_pkf_innov_d2(&in) != MVT_OK || !(in.d2 <= self->cfg.numerics.gate_chi2)) {
         return;
     }
     if (mvt_trk_update_pixels_robust(self, tr, &in, MVT_R(1.0) - p_feet(self, k)) == MVT_OK) {
@@ -744,15 +733,17 @@ static void learn_detection(mvt_tracker_t *self, int k, int masked, mvt_real dt)
     self->p_detect_k[k] = p;
 }
 
-/* 2-D Gaussian density of e under the packed covariance (xx xy yy); 0 where it is not positive. */
+/* 2-D Gaussian density of e under the packed covariance (xx xy yy) (mvt_trk_density); 0 where it
+ * is not positive definite. */
 static mvt_real gauss2(const mvt_real e[2], const mvt_real S[3])
 {
-    const mvt_real det = S[0] * S[2] - S[1] * S[1];
-    if (!(det > MVT_R(0.0)) || !(S[0] > MVT_R(0.0))) {
-        return MVT_R(0.0);
-    }
-    const mvt_real d2 = (S[2] * e[0] * e[0] - MVT_R(2.0) * S[1] * e[0] * e[1] + S[0] * e[1] * e[1]) / det;
-    return MVT_EXP(MVT_R(-0.5) * d2) / (MVT_R(6.283185307179586) * MVT_SQRT(det));
+    mvt_pkf_innov_t g;
+    g.y[0] = e[0];
+    g.y[1] = e[1];
+    g.S[0] = S[0];
+    g.S[1] = S[1];
+    g.S[2] = S[2];
+    return mvt_pkf_innov_d2(&g) == MVT_OK ? mvt_trk_density(&g) : MVT_R(0.0);
 }
 
 /* What the blob's bottom (feet_shown; fp: the feet's innovation) says of whether its top is track

@@ -87,13 +87,17 @@ mvt_err_t mvt_pkf_innovation_from(const mvt_pkf_pred_t *pred, const mvt_pkf_meas
         out->S[1] += extra_px2[1];
         out->S[2] += extra_px2[2];
     }
+    return mvt_pkf_innov_d2(out);
+}
+
+mvt_err_t mvt_pkf_innov_d2(mvt_pkf_innov_t *in)
+{
     mvt_real si[3];
-    if (mvt_la_inv2_sym(out->S, si) != MVT_OK) {
+    if (mvt_la_inv2_sym(in->S, si) != MVT_OK) {
         return MVT_ERR_NUMERIC;
     }
-    out->d2 = out->y[0] * (si[0] * out->y[0] + si[1] * out->y[1]) +
-              out->y[1] * (si[1] * out->y[0] + si[2] * out->y[1]);
-    if (!isfinite(out->d2)) {
+    in->d2 = in->y[0] * (si[0] * in->y[0] + si[1] * in->y[1]) + in->y[1] * (si[1] * in->y[0] + si[2] * in->y[1]);
+    if (!isfinite(in->d2)) {
         return MVT_ERR_NUMERIC;
     }
     return MVT_OK;

@@ -74,6 +74,10 @@ mvt_err_t mvt_pkf_predict_obs(const mvt_cv_state_t *s, const mvt_camera_t *cam, 
 mvt_err_t mvt_pkf_innovation_from(const mvt_pkf_pred_t *pred, const mvt_pkf_meas_t *meas,
                                   const mvt_real *extra_px2, mvt_pkf_innov_t *out);
 
+/* in->d2 = y^T S^-1 y from in->y and in->S (after either changed). MVT_ERR_NUMERIC when S is not
+ * positive definite or d2 not finite. ~12 flops. */
+mvt_err_t mvt_pkf_innov_d2(mvt_pkf_innov_t *in);
+
 /* Innovation of meas against state s in camera cam (predict_obs, then innovation_from). MVT_ERR_BEHIND when the predicted point is
  * at or behind the camera, MVT_ERR_NUMERIC when S is not positive definite. ~100 flops. */
 mvt_err_t mvt_pkf_innovation(const mvt_cv_state_t *s, const mvt_camera_t *cam, mvt_pkf_lin_t lin,
