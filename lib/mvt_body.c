@@ -18,9 +18,9 @@ mvt_real mvt_body_prob(mvt_real lo)
 }
 
 int mvt_body_silhouette(const mvt_tracker_t *self, const mvt_camera_t *cam, const mvt_real x[3], mvt_real box[4],
-                        mvt_real head[2], mvt_real foot[2])
+                        mvt_real head[2], int head_given, mvt_real foot[2])
 {
-    if (mvt_cam_project(cam, x, head, NULL) != MVT_OK) {
+    if (!head_given && mvt_cam_project(cam, x, head, NULL) != MVT_OK) {
         return 0;
     }
     /* the body's half width across the line of sight, horizontally */
@@ -175,6 +175,17 @@ int mvt_body_fragment_of(const mvt_real axis[MVT_BODY_AXIS_N], const mvt_real uv
         return 0;
     }
     return mvt_body_on_body_below_head(axis, uv);
+}
+
+void mvt_body_fragment_bounds(const mvt_real axis[MVT_BODY_AXIS_N], mvt_real box[4])
+{
+    const mvt_real w = axis[4], r = axis[5] + MVT_R(1.0); /* the disc's box a pixel wider, for rounding */
+    const mvt_real u0 = axis[0] < axis[2] ? axis[0] : axis[2], u1 = axis[0] < axis[2] ? axis[2] : axis[0];
+    const mvt_real v0 = axis[1] < axis[3] ? axis[1] : axis[3], v1 = axis[1] < axis[3] ? axis[3] : axis[1];
+    box[0] = u0 - w < axis[2] - r ? u0 - w : axis[2] - r;
+    box[1] = v0 - w < axis[3] - r ? v0 - w : axis[3] - r;
+    box[2] = u1 + w > axis[2] + r ? u1 + w : axis[2] + r;
+    box[3] = v1 + w > axis[3] + r ? v1 + w : axis[3] + r;
 }
 
 mvt_real mvt_body_silhouette_area(const mvt_real axis[MVT_BODY_AXIS_N])

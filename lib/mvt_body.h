@@ -148,10 +148,11 @@ mvt_real mvt_body_prob(mvt_real lo);
 /* The silhouette of a body with head top x in camera cam: box (u0 v0 u1 v1, raw pixels) around the
  * projections of the head's and feet's edges, the head's own projection, and (foot, may be NULL)
  * the floor point under the head's, or the head's where the floor is not in front of the camera
- * (mvt_body_axis_at's foot). 0 when the head is not in front of the camera (box and head unset).
- * O(1): six projections. */
+ * (mvt_body_axis_at's foot). With head_given, head already holds x's projection (the Jacobian
+ * prediction's, mvt_pkf_predict_obs) and is not projected again. 0 when the head is not in front of
+ * the camera (box and head unset). O(1): six projections, five with head_given. */
 int mvt_body_silhouette(const mvt_tracker_t *self, const mvt_camera_t *cam, const mvt_real x[3], mvt_real box[4],
-                        mvt_real head[2], mvt_real foot[2]);
+                        mvt_real head[2], int head_given, mvt_real foot[2]);
 
 /* The silhouette as the body's axis in the picture, thickened: axis = head u v, the floor point
  * under it u v, half the body's width at mid height (px), and MVT_BODY_SHADOW_M at the feet's depth
@@ -177,6 +178,10 @@ int mvt_body_on_body_below_head(const mvt_real axis[MVT_BODY_AXIS_N], const mvt_
  * their depth of their image (the body's shadow or reflection, which background subtraction keeps
  * as foreground and which, seen from above, may be the top of the body's blob). O(1). */
 int mvt_body_fragment_of(const mvt_real axis[MVT_BODY_AXIS_N], const mvt_real uv[2]);
+
+/* A box (u0 v0 u1 v1, px) outside which mvt_body_fragment_of(axis, .) is 0: the thickened axis'
+ * box and the floor disc's. O(1). */
+void mvt_body_fragment_bounds(const mvt_real axis[MVT_BODY_AXIS_N], mvt_real box[4]);
 
 /* The area (px^2) over which the fragments of the body with silhouette axis lie: the thickened
  * axis and the floor by the feet (mvt_body_fragment_of). O(1). */

@@ -126,43 +126,51 @@ void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k)
     }
     const mvt_real lambda = mvt_body_clutter_density(self, k);
     /* each blob's top as a fragment of the bodies likely present that it lies on: each such body's
-     * density (mvt_body_fragment_density) is its scale over its silhouette, found once per body */
-    int16_t fbody[MVT_MAX_TARGETS];
-    mvt_real fscale[MVT_MAX_TARGETS];
-    int nf = 0;
-    for (int i = 0; i < nr; i++) {
-        if (mvt_body_fragment_possible(self, k, rows[i])) {
-            fbody[nf] = rows[i];
-            fscale[nf] = mvt_body_fragment_scale(self, k, rows[i]);
-            nf++;
-        }
-    }
+     * density (mvt_body_fragment_density) is its scale over its silhouette, found once per body;
+     * first against the box its fragments lie in (most blobs are far from most bodies) */
     for (int d = 0; d < nd; d++) {
         ws->frag_dens[d] = MVT_R(0.0);
-        if (!self->meas_ok[k][d]) {
+    }
+    for (int i = 0; i < nr; i++) {
+        const int t = rows[i];
+        if (!mvt_body_fragment_possible(self, k, t)) {
             continue;
         }
-        const mvt_real uv[2] = {view->det[d].u, view->det[d].v};
-        for (int f = 0; f < nf; f++) {
-            if (mvt_body_fragment_of(ws->axis[k][fbody[f]], uv)) {
-                ws->frag_dens[d] += fscale[f];
+        const mvt_real scale = mvt_body_fragment_scale(self, k, t);
+        const mvt_real *ax = ws->axis[k][t];
+        mvt_real box[4];
+        mvt_body_fragment_bounds(ax, box);
+        for (int d = 0; d < nd; d++) {
+            const mvt_real uv[2] = {view->det[d].u, view->det[d].v};
+            if (self->meas_ok[k][d] && uv[0] >= box[0] && uv[0] <= box[2] && uv[1] >= box[1] && uv[1] <= box[3] &&
+                mvt_body_fragment_of(ax, uv)) {
+                ws->frag_dens[d] += scale;
             }
         }
     }
     if (nr > 0 && nd > 0) {
-        const int nc = nd + nr;
+        /* The assignment: a row per track with a blob it may have made (its gain over a miss),
+         * detections' columns then one miss column per row, open to that row alone. A track with no
+         * such blob takes its miss, the only column open to it, which no other row can reach: it is
+         * left out of the solve, which changes no other row's assignment. */
+        const int stride = nd + nr;
         mvt_real *cost = self->cl_cost;
-        int any = 0;
+        int16_t live[MVT_MAX_TARGETS];
+        int nl = 0;
         const int chi2 = self->cfg.gate == MVT_GATE_CHI2;
         const mvt_real r_out2 = self->cfg.motion.outlier_radius_px * self->cfg.motion.outlier_radius_px;
         for (int i = 0; i < nr; i++) {
             const int t = rows[i];
             const mvt_real rp = mvt_body_prob(self->tracks[t].exist_lo) * ws->pd[t];
-            const mvt_real miss = MVT_LOG(MVT_R(1.0) - rp);
-            for (int c = 0; c < nc; c++) {
-                cost[i * nc + c] = MVT_R(-1.0);
+            if (!(rp > MVT_R(0.0))) {
+                continue;
             }
-            cost[i * nc + nd + i] = GAIN_OFFSET;
+            const mvt_real miss = MVT_LOG(MVT_R(1.0) - rp);
+            mvt_real *row = &cost[nl * stride];
+            int any = 0;
+            for (int d = 0; d < nd; d++) {
+                row[d] = MVT_R(-1.0);
+            }
             const mvt_pkf_pred_t *pr = &self->pred[t];
             /* a blob farther than the displaced radius and than the gate could reach along S's
              * longest axis (its largest eigenvalue is at most its trace) has density 0 here:
@@ -172,7 +180,7 @@ void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k)
             const mvt_real far2 = chi2 ? MVT_R(1.01) * gate * (pr->hph[0] + pr->hph[2]) : MVT_R(-1.0);
             for (int d = 0; d < nd; d++) {
                 mvt_pkf_innov_t in;
-                if (!self->meas_ok[k][d] || !(rp > MVT_R(0.0))) {
+                if (!self->meas_ok[k][d]) {
                     continue;
                 }
                 if (chi2) {
@@ -195,17 +203,25 @@ void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k)
                     continue;
                 }
                 gain = gain < GAIN_OFFSET ? gain : GAIN_OFFSET;
-                cost[i * nc + d] = GAIN_OFFSET - gain;
+                row[d] = GAIN_OFFSET - gain;
                 any = 1;
+            }
+            if (any) {
+                live[nl++] = (int16_t)t;
             }
         }
         int r2c[MVT_MAX_TARGETS];
-        if (any && mvt_assoc_solve_own(cost, nr, nc, nc, r2c, &self->assoc_ws) == MVT_OK) {
-            for (int i = 0; i < nr; i++) {
+        for (int i = 0; i < nl; i++) {
+            for (int j = 0; j < nl; j++) {
+                cost[i * stride + nd + j] = i == j ? GAIN_OFFSET : MVT_R(-1.0);
+            }
+        }
+        if (nl > 0 && mvt_assoc_solve_own(cost, nl, nd + nl, stride, r2c, &self->assoc_ws) == MVT_OK) {
+            for (int i = 0; i < nl; i++) {
                 if (r2c[i] >= 0 && r2c[i] < nd) {
-                    ws->assign[rows[i]] = (int16_t)r2c[i];
-                    ws->owner[r2c[i]] = rows[i];
-                    ws->head_of[k][r2c[i]] = rows[i];
+                    ws->assign[live[i]] = (int16_t)r2c[i];
+                    ws->owner[r2c[i]] = live[i];
+                    ws->head_of[k][r2c[i]] = live[i];
                 }
             }
         }

@@ -142,8 +142,14 @@ void mvt_body_visibility(mvt_tracker_t *self, const mvt_view_t *view, int k)
             self->counters.behind_camera++;
             continue;
         }
+        /* the Jacobian form's prediction is the head's raw projection */
+        const int given = self->pred[t].lin == MVT_PKF_JACOBIAN;
+        if (given) {
+            ws->head[t][0] = self->pred[t].h[0];
+            ws->head[t][1] = self->pred[t].h[1];
+        }
         mvt_real foot[2];
-        if (!mvt_body_silhouette(self, cam, tr->s.x, sil, ws->head[t], foot) ||
+        if (!mvt_body_silhouette(self, cam, tr->s.x, sil, ws->head[t], given, foot) ||
             !mvt_body_axis_at(self, cam, tr->s.x, ws->head[t], foot, axis)) {
             sil[0] = MVT_R(1.0);
             sil[2] = MVT_R(0.0);

@@ -7,6 +7,7 @@
 #include <stdint.h>
 #include <cmocka.h>
 
+#include "mvt_body.h"
 #include "mvt_tracker.h"
 #include "test_support.h"
 
@@ -315,6 +316,36 @@ static void test_body_config_out_of_range_rejected(void **state)
     assert_int_equal(mvt_tracker_init(&g_tracker, &bad, cams, 5), MVT_ERR_INVALID);
 }
 
+/* Every point mvt_body_fragment_of counts as a fragment of a body lies in the box
+ * mvt_body_fragment_bounds gives for it (the tracker tests the box first): random axes in every
+ * direction, points on a grid around them at sub-pixel spacing. */
+static void test_body_fragments_inside_their_bounds(void **state)
+{
+    (void)state;
+    test_rng_t rng = {424242ULL};
+    long inside = 0;
+    for (int n = 0; n < 2000; n++) {
+        mvt_real axis[MVT_BODY_AXIS_N];
+        for (int i = 0; i < 4; i++) {
+            axis[i] = (mvt_real)(2000.0 * test_uniform(&rng) - 500.0);
+        }
+        axis[4] = (mvt_real)(1.0 + 80.0 * test_uniform(&rng));
+        axis[5] = test_uniform(&rng) < 0.2 ? MVT_R(0.0) : (mvt_real)(60.0 * test_uniform(&rng));
+        mvt_real box[4];
+        mvt_body_fragment_bounds(axis, box);
+        const double lo_u = box[0] - 20.0, hi_u = box[2] + 20.0, lo_v = box[1] - 20.0, hi_v = box[3] + 20.0;
+        for (int j = 0; j < 400; j++) {
+            const mvt_real uv[2] = {(mvt_real)(lo_u + (hi_u - lo_u) * test_uniform(&rng)),
+                                    (mvt_real)(lo_v + (hi_v - lo_v) * test_uniform(&rng))};
+            if (mvt_body_fragment_of(axis, uv)) {
+                inside++;
+                assert_true(uv[0] >= box[0] && uv[0] <= box[2] && uv[1] >= box[1] && uv[1] <= box[3]);
+            }
+        }
+    }
+    assert_true(inside > 1000); /* the points reach the bodies */
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -323,6 +354,7 @@ int main(void)
         cmocka_unit_test(test_body_clutter_alone_confirms_nobody),
         cmocka_unit_test(test_body_feet_behind_declared_furniture_not_used),
         cmocka_unit_test(test_body_config_out_of_range_rejected),
+        cmocka_unit_test(test_body_fragments_inside_their_bounds),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
