@@ -3,9 +3,11 @@
 #include <math.h>
 #include <stddef.h>
 
+/* Written without short-circuits, as the tests below: a branch per entry whose outcome the data
+ * decides is mispredicted often, and costs more than the arithmetic. */
 static int feasible(mvt_real c)
 {
-    return c >= MVT_R(0.0) && isfinite(c);
+    return (c >= MVT_R(0.0)) & (isfinite(c) != 0);
 }
 
 /* Column j after a search step of delta: the potentials of a column in the tree and its row move,
@@ -134,14 +136,38 @@ mvt_err_t mvt_assoc_solve_own(const mvt_real *cost, int n_rows, int n_cols, int 
         }
         int n = 0;
         for (int c = 0; c < own0; c++) {
-            if (feasible(row[c])) {
-                ws->feasible[r][n++] = (int16_t)c;
-                worst = row[c] > worst ? row[c] : worst;
-            }
+            const int ok = feasible(row[c]);
+            ws->feasible[r][n] = (int16_t)c; /* kept when feasible: the count moves past it */
+            n += ok;
+            worst = ok & (row[c] > worst) ? row[c] : worst;
         }
         ws->feasible[r][n++] = (int16_t)(own0 + r);
         worst = row[own0 + r] > worst ? row[own0 + r] : worst;
         ws->n_feasible[r] = (int16_t)n;
+    }
+    /* Where every row's cheapest feasible column (of equals the first) is a different one, each
+     * row's search takes it at once, as mvt_assoc_solve's does: every potential is still 0 when
+     * the search starts, so its reduced costs are the costs, and the column is free. That is the
+     * assignment, found without the searches (the common case: each track has a blob of its own). */
+    {
+        int distinct = 1;
+        for (int j = 0; j < n_cols; j++) {
+            ws->used[j] = 0;
+        }
+        for (int r = 0; r < n_rows && distinct; r++) {
+            const mvt_real *row = &cost[r * stride];
+            int best = ws->feasible[r][0];
+            for (int f = 1; f < ws->n_feasible[r]; f++) {
+                const int c = ws->feasible[r][f];
+                best = row[c] < row[best] ? c : best;
+            }
+            distinct = !ws->used[best];
+            ws->used[best] = 1;
+            row_to_col[r] = best;
+        }
+        if (distinct) {
+            return MVT_OK;
+        }
     }
     /* the values mvt_assoc_solve starts from; `big` itself is never needed here */
     const mvt_real inf = (worst + MVT_R(1.0)) * (mvt_real)(n_rows + 1) * (mvt_real)(4 * (n_rows + 1));
@@ -166,29 +192,23 @@ mvt_err_t mvt_assoc_solve_own(const mvt_real *cost, int n_rows, int n_cols, int 
             const int16_t *cols = ws->feasible[i0 - 1];
             for (int f = 0; f < ws->n_feasible[i0 - 1]; f++) {
                 const int c = cols[f];
-                const mvt_real a = row[c];
                 const int j = c + 1;
-                if (ws->used[j]) {
-                    continue;
-                }
-                const mvt_real cur = a - ws->u[i0] - ws->v[j];
-                if (cur < ws->minv[j]) {
-                    if (!ws->seen[j]) {
-                        ws->seen[j] = 1;
-                        ws->reached[n++] = (int16_t)j;
-                    }
-                    ws->minv[j] = cur;
-                    ws->way[j] = (int16_t)j0;
-                }
+                const mvt_real cur = row[c] - ws->u[i0] - ws->v[j];
+                const int closer = (ws->used[j] == 0) & (cur < ws->minv[j]);
+                ws->reached[n] = (int16_t)j; /* kept when first reached */
+                n += closer & (ws->seen[j] == 0);
+                ws->seen[j] = (uint8_t)(ws->seen[j] | closer);
+                ws->minv[j] = closer ? cur : ws->minv[j];
+                ws->way[j] = closer ? (int16_t)j0 : ws->way[j];
             }
             mvt_real delta = inf;
             int j1 = 0;
             for (int q = 0; q < n; q++) { /* the smallest, and of equals the first column, as mvt_assoc_solve */
                 const int j = ws->reached[q];
-                if (!ws->used[j] && (ws->minv[j] < delta || (!(ws->minv[j] > delta) && j < j1))) {
-                    delta = ws->minv[j];
-                    j1 = j;
-                }
+                const mvt_real m = ws->minv[j];
+                const int better = (ws->used[j] == 0) & ((m < delta) | (((m > delta) == 0) & (j < j1)));
+                delta = better ? m : delta;
+                j1 = better ? j : j1;
             }
             if (j1 == 0) {
                 return MVT_ERR_NUMERIC; /* only with non-finite arithmetic; cannot happen otherwise */

@@ -49,8 +49,10 @@ mvt_err_t mvt_assoc_solve(const mvt_real *cost, int n_rows, int n_cols, int stri
  * column is free when its search starts, at no more than the costliest feasible entry, while any
  * path through a forbidden entry costs more than the whole matching), so each search looks only at
  * its rows' feasible entries and the columns they reach instead of at every column: the same
- * choices in the same order, at a fraction of the cost when each row has few feasible entries.
- * A matrix without that structure is solved by mvt_assoc_solve. Cost O(n_rows^2 * n_cols) at worst
+ * choices in the same order, at a fraction of the cost when each row has few feasible entries;
+ * where every row's cheapest feasible column (of equals the first) is a different one, that is the
+ * assignment, taken without searching. A matrix without that structure is solved by
+ * mvt_assoc_solve. Cost O(n_rows^2 * n_cols) at worst
  * (the row scans), usually far less; memory: ws only. */
 mvt_err_t mvt_assoc_solve_own(const mvt_real *cost, int n_rows, int n_cols, int stride, int *row_to_col,
                               mvt_assoc_ws_t *ws);

@@ -262,9 +262,10 @@ mvt_real mvt_body_clutter_density(const mvt_tracker_t *self, int k)
     return (now > self->clutter_n[k] ? now : self->clutter_n[k]) / ((mvt_real)cam->width * (mvt_real)cam->height);
 }
 
+/* Without short-circuits: each would be a branch that the data decide (see mvt_assoc.c). */
 static int boxes_overlap(const mvt_real a[4], const mvt_real b[4])
 {
-    return a[0] < b[2] && b[0] < a[2] && a[1] < b[3] && b[1] < a[3];
+    return (a[0] < b[2]) & (b[0] < a[2]) & (a[1] < b[3]) & (b[1] < a[3]);
 }
 
 int mvt_body_feet_visible(const mvt_tracker_t *self, int k, const mvt_detection_t *det, int self_t, mvt_real uv[2])
@@ -277,11 +278,12 @@ int mvt_body_feet_visible(const mvt_tracker_t *self, int k, const mvt_detection_
     }
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         const mvt_real *s = self->body.sil[k][t];
-        if (!(s[2] > s[0]) || !boxes_overlap(b, s)) {
-            continue; /* first the boxes: most bodies are elsewhere in the picture */
+        if (!(s[2] > s[0])) {
+            continue; /* no body there */
         }
+        /* another body likely present whose silhouette's box meets the blob's (one test) */
         const mvt_track_t *tr = &self->tracks[t];
-        if (t != self_t && tr->id != 0 && tr->exist_lo > MVT_R(0.0)) {
+        if (boxes_overlap(b, s) & (t != self_t) & (tr->id != 0) & (tr->exist_lo > MVT_R(0.0))) {
             return 0;
         }
     }
