@@ -140,12 +140,19 @@ void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k)
         const mvt_real *ax = ws->axis[k][t];
         mvt_real box[4];
         mvt_body_fragment_bounds(ax, box);
+        /* the blobs in the box listed first, without a branch per blob (which the processor
+         * would mispredict often: whether a blob lies there is the data's) */
+        int16_t near[MVT_MAX_DETECTIONS];
+        int n_near = 0;
         for (int d = 0; d < nd; d++) {
+            const mvt_real u = view->det[d].u, v = view->det[d].v;
+            near[n_near] = (int16_t)d;
+            n_near += (self->meas_ok[k][d] != 0) & (u >= box[0]) & (u <= box[2]) & (v >= box[1]) & (v <= box[3]);
+        }
+        for (int q = 0; q < n_near; q++) {
+            const int d = near[q];
             const mvt_real uv[2] = {view->det[d].u, view->det[d].v};
-            /* one test, not five (each would be a branch the processor mispredicts as often) */
-            const int in_box = (self->meas_ok[k][d] != 0) & (uv[0] >= box[0]) & (uv[0] <= box[2]) & (uv[1] >= box[1]) &
-                               (uv[1] <= box[3]);
-            if (in_box && mvt_body_fragment_of(ax, uv)) {
+            if (mvt_body_fragment_of(ax, uv)) {
                 ws->frag_dens[d] += scale;
             }
         }
@@ -180,19 +187,21 @@ void mvt_body_explain(mvt_tracker_t *self, const mvt_view_t *view, int k)
              * cost (most blobs are far from most heads) */
             const mvt_real gate = self->cfg.numerics.gate_chi2;
             const mvt_real far2 = chi2 ? MVT_R(1.01) * gate * (pr->hph[0] + pr->hph[2]) : MVT_R(-1.0);
+            /* (listed first without a branch per blob, as the fragments' above) */
+            int16_t near[MVT_MAX_DETECTIONS];
+            int n_near = 0;
+            const int jac = pr->lin == MVT_PKF_JACOBIAN;
             for (int d = 0; d < nd; d++) {
+                const mvt_real *z = jac ? self->meas[k][d].raw : self->meas[k][d].ideal;
+                const mvt_real y0 = z[0] - pr->h[0], y1 = z[1] - pr->h[1];
+                const mvt_real y2 = y0 * y0 + y1 * y1;
+                const int far = chi2 & (y2 > r_out2) & (y2 > far2 + MVT_R(2.02) * gate * self->meas[k][d].var_px2);
+                near[n_near] = (int16_t)d;
+                n_near += (self->meas_ok[k][d] != 0) & !far;
+            }
+            for (int q = 0; q < n_near; q++) {
+                const int d = near[q];
                 mvt_pkf_innov_t in;
-                if (!self->meas_ok[k][d]) {
-                    continue;
-                }
-                if (chi2) {
-                    const mvt_real *z = pr->lin == MVT_PKF_JACOBIAN ? self->meas[k][d].raw : self->meas[k][d].ideal;
-                    const mvt_real y0 = z[0] - pr->h[0], y1 = z[1] - pr->h[1];
-                    const mvt_real y2 = y0 * y0 + y1 * y1;
-                    if ((y2 > r_out2) & (y2 > far2 + MVT_R(2.02) * gate * self->meas[k][d].var_px2)) {
-                        continue;
-                    }
-                }
                 if (mvt_pkf_innovation_from(pr, &self->meas[k][d], NULL, &in) != MVT_OK) {
                     continue;
                 }
