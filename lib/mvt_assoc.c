@@ -139,7 +139,7 @@ mvt_err_t mvt_assoc_solve_own(const mvt_real *cost, int n_rows, int n_cols, int 
             const int ok = feasible(row[c]);
             ws->feasible[r][n] = (int16_t)c; /* kept when feasible: the count moves past it */
             n += ok;
-            worst = ok & (row[c] > worst) ? row[c] : worst;
+            worst = (ok & (row[c] > worst)) ? row[c] : worst;
         }
         ws->feasible[r][n++] = (int16_t)(own0 + r);
         worst = row[own0 + r] > worst ? row[own0 + r] : worst;
