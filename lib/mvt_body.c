@@ -12,6 +12,14 @@ mvt_real mvt_body_logit(mvt_real p)
     return MVT_LOG(p / (MVT_R(1.0) - p));
 }
 
+void mvt_body_height_start(mvt_track_t *tr, mvt_real z, mvt_real zz)
+{
+    tr->seen_z = z;
+    tr->seen_zz = zz;
+    tr->z_mean = z;
+    tr->z_var = MVT_R(0.0);
+}
+
 mvt_real mvt_body_prob(mvt_real lo)
 {
     return MVT_R(1.0) / (MVT_R(1.0) + MVT_EXP(-lo));

@@ -65,6 +65,10 @@
  * head's bob (MVT_BODY_HEAD_BOB_M, m). */
 #define MVT_BODY_HEIGHT_BAND MVT_R(3.0)
 #define MVT_BODY_HEAD_BOB_M MVT_R(0.04)
+/* The heights two views give a track are remembered over about this time, s (a few strides): how
+ * far they wandered beyond a walking head's bob is how little the last one is known to be its
+ * person's, which a lost label's heir is compared with (mvt_body_birth.c). */
+#define MVT_BODY_HEIGHT_MEMORY_S MVT_R(1.0)
 /* A camera's detection probability (a visible head reported inside its gate) is a running mean
  * over this time, s, of its likely-present tracks' hits, within MVT_BODY_PD_MIN..MVT_BODY_PD_MAX:
  * misses come in runs (a bad segmentation, a burst of noise) that independent frames at the
@@ -144,6 +148,9 @@
 /* Probability p in (0, 1) as log odds, and back. */
 mvt_real mvt_body_logit(mvt_real p);
 mvt_real mvt_body_prob(mvt_real lo);
+
+/* Track tr's person's height from now on: z, variance zz (its estimate starts again there). */
+void mvt_body_height_start(mvt_track_t *tr, mvt_real z, mvt_real zz);
 
 /* The silhouette of a body with head top x in camera cam: box (u0 v0 u1 v1, raw pixels) around the
  * projections of the head's and feet's edges, the head's own projection, and (foot, may be NULL)

@@ -312,10 +312,12 @@ static void label_of(const mvt_tracker_t *self, const mvt_track_t *tr, mvt_body_
     widened(self, tr, L->P);
     if (tr->seen_zz > MVT_R(0.0)) {
         /* the head's height is the person's (a walking head's bob about it), which the motion
-         * model's vertical noise forgets over an outage */
+         * model's vertical noise forgets over an outage; as far as it wandered beyond the bob
+         * lately, it is not known to be the person's */
+        const mvt_real bob2 = MVT_BODY_HEAD_BOB_M * MVT_BODY_HEAD_BOB_M;
         L->x[2] = tr->seen_z;
         L->P[2] = L->P[5] = L->P[6] = L->P[7] = MVT_R(0.0);
-        L->P[8] = tr->seen_zz + MVT_BODY_HEAD_BOB_M * MVT_BODY_HEAD_BOB_M;
+        L->P[8] = tr->seen_zz + bob2 + (tr->z_var > bob2 ? tr->z_var - bob2 : MVT_R(0.0));
     }
 }
 
@@ -327,8 +329,8 @@ static void give_label(mvt_track_t *tr, const mvt_body_label_t *L, const mvt_bod
     tr->status = L->was_shown ? MVT_TRACK_CONFIRMED : L->status; /* shown before */
     tr->was_shown = L->was_shown;
     tr->app = L->app;
-    tr->seen_z = L->seen_zz > MVT_R(0.0) ? L->seen_z : cand->x[2]; /* or until two views place them, */
-    tr->seen_zz = L->seen_zz > MVT_R(0.0) ? L->seen_zz : cand->P[8]; /* the candidate's */
+    mvt_body_height_start(tr, L->seen_zz > MVT_R(0.0) ? L->seen_z : cand->x[2], /* or until two views */
+                          L->seen_zz > MVT_R(0.0) ? L->seen_zz : cand->P[8]);    /* place them, the candidate's */
     tr->exist_lo = L->dormant || cand->lo > L->exist_lo ? cand->lo : L->exist_lo;
 }
 
@@ -429,8 +431,7 @@ static void label_births(mvt_tracker_t *self, const int16_t born[], int n_born)
             tr->id = self->next_id;
             self->next_id = self->next_id < INT32_MAX ? self->next_id + 1 : 1;
             tr->status = MVT_TRACK_TENTATIVE;
-            tr->seen_z = cand->x[2]; /* the person's height until two views place them */
-            tr->seen_zz = cand->P[8];
+            mvt_body_height_start(tr, cand->x[2], cand->P[8]); /* the person's until two views place them */
             mvt_trk_app_reset(&tr->app);
             self->counters.births++;
         }

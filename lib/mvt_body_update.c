@@ -271,8 +271,7 @@ static int heads_agree_elsewhere(mvt_tracker_t *self, mvt_track_t *tr, int t)
         return 0; /* within it, or a singular spread (< 0) */
     }
     mvt_trk_start(self, tr, x, cov, tr->s.utime_us);
-    tr->seen_z = x[2];
-    tr->seen_zz = cov[8];
+    mvt_body_height_start(tr, x[2], cov[8]);
     for (int i = 0; i < n; i++) {
         mark_placed(tr, obs[i].cam);
     }
@@ -328,6 +327,11 @@ void mvt_body_one_view(mvt_tracker_t *self, const mvt_frame_t *frame)
         if (mvt_trk_popcount(tr->cameras_placed) >= 2) {
             tr->seen_z = tr->s.x[2]; /* the person's height, where two views' rays meet */
             tr->seen_zz = tr->s.P[14];
+            const mvt_real dt = self->frame_dt_s > MVT_R(0.0) ? self->frame_dt_s : MVT_R(0.04);
+            const mvt_real a = dt / (MVT_BODY_HEIGHT_MEMORY_S + dt);
+            const mvt_real d = tr->seen_z - tr->z_mean;
+            tr->z_mean += a * d;
+            tr->z_var = (MVT_R(1.0) - a) * (tr->z_var + a * d * d);
             learn_feet(self, tr, t, frame);
             continue;
         }

@@ -129,7 +129,9 @@ void mvt_tracker_save(const mvt_tracker_t *self, mvt_tracker_persist_t *out)
 static int seen_height_ok(const mvt_tracker_config_t *c, const mvt_track_t *tr)
 {
     return tr->seen_z >= c->volume.min[2] - MVT_PERSIST_SLACK_M && tr->seen_z <= c->volume.max[2] + MVT_PERSIST_SLACK_M &&
-           tr->seen_zz >= MVT_R(0.0) && tr->seen_zz <= MVT_PERSIST_MAX_VAR;
+           tr->seen_zz >= MVT_R(0.0) && tr->seen_zz <= MVT_PERSIST_MAX_VAR &&
+           tr->z_mean >= c->volume.min[2] - MVT_PERSIST_SLACK_M && tr->z_mean <= c->volume.max[2] + MVT_PERSIST_SLACK_M &&
+           tr->z_var >= MVT_R(0.0) && tr->z_var <= MVT_PERSIST_MAX_VAR;
 }
 
 /* Each camera's memory of displacement (mvt_imm_view_t): a probability, a finite offset no larger

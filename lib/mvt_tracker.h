@@ -235,6 +235,10 @@ typedef struct mvt_track {
     mvt_real seen_z, seen_zz;   /* head height and its variance the last frame seen: a coasting
                                    track's height spreads with the motion models' vertical noise,
                                    a person's does not (a lost label's heir is compared with this) */
+    mvt_real z_mean, z_var;     /* the heights two views gave it, over about the last
+                                   MVT_BODY_HEIGHT_MEMORY_S: their running mean and variance (a
+                                   walking head's bob, and beyond it a track whose height was not its
+                                   person's: one that slid down onto a piece of a body) */
     mvt_app_t app;              /* its appearance (blobs with colour only) */
     uint32_t cameras_placed;      /* this frame: cameras whose detection updated the track as
                                      the person's (not judged displaced) */
