@@ -327,8 +327,10 @@ void mvt_body_one_view(mvt_tracker_t *self, const mvt_frame_t *frame)
         if (mvt_trk_popcount(tr->cameras_placed) >= 2) {
             tr->seen_z = tr->s.x[2]; /* the person's height, where two views' rays meet */
             tr->seen_zz = tr->s.P[14];
-            const mvt_real dt = self->frame_dt_s > MVT_R(0.0) ? self->frame_dt_s : MVT_R(0.04);
-            const mvt_real a = dt / (MVT_BODY_HEIGHT_MEMORY_S + dt);
+            /* the running mean and variance of those heights, over about MVT_BODY_HEIGHT_MEMORY_S
+             * (nothing to weigh before the rig's frame interval is known) */
+            const mvt_real dt = self->frame_dt_s;
+            const mvt_real a = dt > MVT_R(0.0) ? dt / (MVT_BODY_HEIGHT_MEMORY_S + dt) : MVT_R(0.0);
             const mvt_real d = tr->seen_z - tr->z_mean;
             tr->z_mean += a * d;
             tr->z_var = (MVT_R(1.0) - a) * (tr->z_var + a * d * d);
