@@ -136,18 +136,15 @@ static void update_feet(mvt_tracker_t *self, mvt_track_t *tr, int k, const mvt_p
 {
     mvt_pkf_innov_t in = *f;
     const mvt_real dx[3] = {tr->s.x[0] - x0[0], tr->s.x[1] - x0[1], tr->s.x[2] - x0[2]};
-    const mvt_real *P = tr->s.P;
-    mvt_real hp[2][3];
     for (int r = 0; r < 2; r++) {
         const mvt_real *H = &in.H[r * 3];
         in.y[r] -= H[0] * dx[0] + H[1] * dx[1] + H[2] * dx[2];
-        for (int c = 0; c < 3; c++) {
-            hp[r][c] = H[0] * P[0 * 6 + c] + H[1] * P[1 * 6 + c] + H[2] * P[2 * 6 + c];
-        }
     }
-    in.S[0] = hp[0][0] * in.H[0] + hp[0][1] * in.H[1] + hp[0][2] * in.H[2] + in.r;
-    in.S[1] = hp[0][0] * in.H[3] + hp[0][1] * in.H[4] + hp[0][2] * in.H[5];
-    in.S[2] = hp[1][0] * in.H[3] + hp[1][1] * in.H[4] + hp[1][2] * in.H[5] + in.r;
+    mvt_real hp[6], hph[3];
+    mvt_pkf_hph(in.H, tr->s.P, hp, hph);
+    in.S[0] = hph[0] + in.r;
+    in.S[1] = hph[1];
+    in.S[2] = hph[2] + in.r;
     if (mvt_pkf_innov_d2(&in) != MVT_OK || !(in.d2 <= self->cfg.numerics.gate_chi2)) {
         return;
     }
@@ -769,17 +766,12 @@ static mvt_real feet_ratio(const mvt_tracker_t *self, const mvt_track_t *tr, int
                            const mvt_pkf_innov_t *fp)
 {
     const mvt_pkf_innov_t f = *fp;
-    const mvt_real *P = tr->s.P;
-    mvt_real hp[2][3];
-    for (int r = 0; r < 2; r++) {
-        for (int c = 0; c < 3; c++) {
-            hp[r][c] = h->H[r * 3 + 0] * P[0 * 6 + c] + h->H[r * 3 + 1] * P[1 * 6 + c] + h->H[r * 3 + 2] * P[2 * 6 + c];
-        }
-    }
+    mvt_real hp[6]; /* H_h P */
+    mvt_pkf_hph(h->H, tr->s.P, hp, NULL);
     mvt_real C[2][2]; /* C[r][q] = (H_h P H_f^T)[r][q] */
     for (int r = 0; r < 2; r++) {
         for (int q = 0; q < 2; q++) {
-            C[r][q] = hp[r][0] * f.H[q * 3 + 0] + hp[r][1] * f.H[q * 3 + 1] + hp[r][2] * f.H[q * 3 + 2];
+            C[r][q] = hp[r * 3 + 0] * f.H[q * 3 + 0] + hp[r * 3 + 1] * f.H[q * 3 + 1] + hp[r * 3 + 2] * f.H[q * 3 + 2];
         }
     }
     const mvt_real dh = h->S[0] * h->S[2] - h->S[1] * h->S[1];

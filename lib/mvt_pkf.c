@@ -54,19 +54,23 @@ mvt_err_t mvt_pkf_predict_obs(const mvt_cv_state_t *s, const mvt_camera_t *cam, 
         out->h[0] = alpha * (P[0] * x[0] + P[1] * x[1] + P[2] * x[2] + P[3]);
         out->h[1] = alpha * (P[4] * x[0] + P[5] * x[1] + P[6] * x[2] + P[7]);
     }
-    /* H Ppp H^T */
-    const mvt_real *P = s->P;
-    mvt_real hp[6]; /* H Ppp, 2x3 */
+    mvt_real hp[6];
+    mvt_pkf_hph(out->H, s->P, hp, out->hph);
+    return MVT_OK;
+}
+
+void mvt_pkf_hph(const mvt_real H[6], const mvt_real P[36], mvt_real hp[6], mvt_real hph[3])
+{
     for (int a = 0; a < 2; a++) {
         for (int c = 0; c < 3; c++) {
-            hp[a * 3 + c] = out->H[a * 3 + 0] * P[0 * 6 + c] + out->H[a * 3 + 1] * P[1 * 6 + c] +
-                            out->H[a * 3 + 2] * P[2 * 6 + c];
+            hp[a * 3 + c] = H[a * 3 + 0] * P[0 * 6 + c] + H[a * 3 + 1] * P[1 * 6 + c] + H[a * 3 + 2] * P[2 * 6 + c];
         }
     }
-    out->hph[0] = hp[0] * out->H[0] + hp[1] * out->H[1] + hp[2] * out->H[2];
-    out->hph[1] = hp[0] * out->H[3] + hp[1] * out->H[4] + hp[2] * out->H[5];
-    out->hph[2] = hp[3] * out->H[3] + hp[4] * out->H[4] + hp[5] * out->H[5];
-    return MVT_OK;
+    if (hph != NULL) {
+        hph[0] = hp[0] * H[0] + hp[1] * H[1] + hp[2] * H[2];
+        hph[1] = hp[0] * H[3] + hp[1] * H[4] + hp[2] * H[5];
+        hph[2] = hp[3] * H[3] + hp[4] * H[4] + hp[5] * H[5];
+    }
 }
 
 mvt_err_t mvt_pkf_innovation_from(const mvt_pkf_pred_t *pred, const mvt_pkf_meas_t *meas,

@@ -74,6 +74,10 @@ mvt_err_t mvt_pkf_predict_obs(const mvt_cv_state_t *s, const mvt_camera_t *cam, 
 mvt_err_t mvt_pkf_innovation_from(const mvt_pkf_pred_t *pred, const mvt_pkf_meas_t *meas,
                                   const mvt_real *extra_px2, mvt_pkf_innov_t *out);
 
+/* H P and H P H^T (packed xx xy yy) of a pixel point's 2x3 Jacobian H (row-major) against the
+ * position block of the 6x6 covariance P: hp 2x3 row-major; hph may be NULL. ~30 flops. */
+void mvt_pkf_hph(const mvt_real H[6], const mvt_real P[36], mvt_real hp[6], mvt_real hph[3]);
+
 /* in->d2 = y^T S^-1 y from in->y and in->S (after either changed). MVT_ERR_NUMERIC when S is not
  * positive definite or d2 not finite. ~12 flops. */
 mvt_err_t mvt_pkf_innov_d2(mvt_pkf_innov_t *in);

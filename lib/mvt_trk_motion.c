@@ -81,16 +81,10 @@ mvt_err_t mvt_trk_update_head(mvt_tracker_t *self, mvt_track_t *tr, int k, const
     return mvt_imm_update_view_lr(&tr->imm, &self->cfg.motion, in->H, in->y, noise, in->S, &tr->view[k], own_lr, &tr->s);
 }
 
-mvt_err_t mvt_trk_update_pixels(mvt_tracker_t *self, mvt_track_t *tr, const mvt_pkf_innov_t *in)
-{
-    if (single(self)) {
-        return mvt_pkf_update(&tr->s, in);
-    }
-    const mvt_real noise[4] = {in->r, MVT_R(0.0), MVT_R(0.0), in->r};
-    return mvt_imm_update(&tr->imm, &self->cfg.motion, 2, in->H, in->y, noise, &tr->s);
-}
-
-mvt_err_t mvt_trk_update_pixels_robust(mvt_tracker_t *self, mvt_track_t *tr, const mvt_pkf_innov_t *in, mvt_real p_out)
+/* A pixel point's update with the bank's outlier prior raised to p_out; position only (within a
+ * camera's pass) or the whole combined state. */
+static mvt_err_t update_pixels(mvt_tracker_t *self, mvt_track_t *tr, const mvt_pkf_innov_t *in, mvt_real p_out,
+                               int position_only)
 {
     if (single(self)) {
         return mvt_pkf_update(&tr->s, in);
@@ -98,7 +92,18 @@ mvt_err_t mvt_trk_update_pixels_robust(mvt_tracker_t *self, mvt_track_t *tr, con
     mvt_imm_config_t c = self->cfg.motion;
     c.p_outlier = p_out > c.p_outlier ? p_out : c.p_outlier;
     const mvt_real noise[4] = {in->r, MVT_R(0.0), MVT_R(0.0), in->r};
-    return mvt_imm_update_pos(&tr->imm, &c, 2, in->H, in->y, noise, &tr->s);
+    return position_only ? mvt_imm_update_pos(&tr->imm, &c, 2, in->H, in->y, noise, &tr->s)
+                         : mvt_imm_update(&tr->imm, &c, 2, in->H, in->y, noise, &tr->s);
+}
+
+mvt_err_t mvt_trk_update_pixels(mvt_tracker_t *self, mvt_track_t *tr, const mvt_pkf_innov_t *in)
+{
+    return update_pixels(self, tr, in, MVT_R(0.0), 0);
+}
+
+mvt_err_t mvt_trk_update_pixels_robust(mvt_tracker_t *self, mvt_track_t *tr, const mvt_pkf_innov_t *in, mvt_real p_out)
+{
+    return update_pixels(self, tr, in, p_out, 1);
 }
 
 mvt_err_t mvt_trk_update_point(mvt_tracker_t *self, mvt_track_t *tr, const mvt_real z[3], const mvt_real R[9])
