@@ -16,7 +16,8 @@
  * widened by the overlap first).
  * Two heads closer than body.halfwidth_m horizontally, one of them placed this frame, are one person (two bodies cannot stand
  * inside each other): the track with the likelier estimate (the higher existence) goes on with its
- * own identity, or with the other's when only the other was shown confirmed.
+ * own identity, or with the other's when only the other was shown confirmed. The other label, when
+ * it was shown, sleeps as a lost one does (one of the two tracks had taken the wrong person).
  * Status: confirmed from the frame the existence first reaches population.exist_confirm, for as long as it
  * stays above one half (more likely there than not; coasting when no camera saw the head this
  * frame); tentative otherwise: a track that drops under one half keeps its identity and is shown
@@ -144,7 +145,17 @@ void mvt_body_prune(mvt_tracker_t *self)
             keep->status = status;
             keep->was_shown |= drop->was_shown;
             keep->cameras_used |= drop->cameras_used;
-            end_track(self, drop, &self->counters.duplicates_deleted);
+            if (drop->was_shown && named == keep) {
+                /* two bodies cannot stand inside each other, so one of the two tracks followed the
+                 * wrong person here; which one the model cannot tell, and the other label is no
+                 * evidence that its person left: it sleeps like any lost one, for its person found
+                 * again nearby (heir_of, mvt_body_birth.c) */
+                drop->dormant = 1;
+                drop->status = MVT_TRACK_TENTATIVE;
+                drop->last_update_us = self->last_utime_us;
+            } else {
+                end_track(self, drop, &self->counters.duplicates_deleted);
+            }
         }
     }
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {

@@ -199,7 +199,8 @@ typedef struct mvt_counters {
     uint64_t deleted_exit;            /*   walked out through a side wall (population.exit_s) */
     uint64_t deleted_uncertain;       /*   position std above numerics.max_pos_std_m */
     uint64_t deleted_outside;         /*   left the volume (plus margin) */
-    uint64_t duplicates_deleted;      /*   a second track on one person (mvt_body_prune.c) */
+    uint64_t duplicates_deleted;      /*   a second track on one person, never shown (a shown
+                                             one sleeps: mvt_body_prune.c) */
     uint64_t birth_candidates_dropped;/* multi-view birth candidates beyond MVT_MAX_BIRTH_CANDIDATES */
     uint64_t occluded_updates;        /* track-camera pairs explained as hidden in another body's
                                          blob and constrained to its box */
