@@ -36,6 +36,15 @@ static void end_track(mvt_tracker_t *self, mvt_track_t *tr, uint64_t *reason)
     memset(tr, 0, sizeof(*tr));
 }
 
+/* Track tr's label waits, unseen and unshown, for its person found again (heir_of,
+ * mvt_body_birth.c); asleep since now. */
+static void fall_asleep(const mvt_tracker_t *self, mvt_track_t *tr)
+{
+    tr->dormant = 1;
+    tr->status = MVT_TRACK_TENTATIVE;
+    tr->last_update_us = self->last_utime_us;
+}
+
 /* A track by a side wall whose velocity carries it out through that wall (faster than a tenth of
  * walking pace): its person left. */
 static int heading_out(const mvt_tracker_config_t *c, const mvt_track_t *tr)
@@ -71,9 +80,7 @@ void mvt_body_prune(mvt_tracker_t *self)
             }
         } else if (!(tr->exist_lo >= lo_delete)) {
             if (tr->was_shown && !heading_out(c, tr)) {
-                tr->dormant = 1; /* the label waits for its person (heir_of, mvt_body_birth.c) */
-                tr->status = MVT_TRACK_TENTATIVE;
-                tr->last_update_us = self->last_utime_us; /* asleep since */
+                fall_asleep(self, tr);
             } else if (tr->was_shown) {
                 end_track(self, tr, &self->counters.deleted_exit); /* walked out */
             } else {
@@ -149,10 +156,8 @@ void mvt_body_prune(mvt_tracker_t *self)
                 /* two bodies cannot stand inside each other, so one of the two tracks followed the
                  * wrong person here; which one the model cannot tell, and the other label is no
                  * evidence that its person left: it sleeps like any lost one, for its person found
-                 * again nearby (heir_of, mvt_body_birth.c) */
-                drop->dormant = 1;
-                drop->status = MVT_TRACK_TENTATIVE;
-                drop->last_update_us = self->last_utime_us;
+                 * again nearby */
+                fall_asleep(self, drop);
             } else {
                 end_track(self, drop, &self->counters.duplicates_deleted);
             }
