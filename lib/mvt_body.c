@@ -270,12 +270,6 @@ mvt_real mvt_body_clutter_density(const mvt_tracker_t *self, int k)
     return (now > self->clutter_n[k] ? now : self->clutter_n[k]) / ((mvt_real)cam->width * (mvt_real)cam->height);
 }
 
-/* Without short-circuits: each would be a branch that the data decide (see mvt_assoc.c). */
-static int boxes_overlap(const mvt_real a[4], const mvt_real b[4])
-{
-    return (a[0] < b[2]) & (b[0] < a[2]) & (a[1] < b[3]) & (b[1] < a[3]);
-}
-
 int mvt_body_feet_visible(const mvt_tracker_t *self, int k, const mvt_detection_t *det, int self_t, mvt_real uv[2])
 {
     const mvt_camera_t *cam = &self->cams[k];
@@ -291,7 +285,7 @@ int mvt_body_feet_visible(const mvt_tracker_t *self, int k, const mvt_detection_
         }
         /* another body likely present whose silhouette's box meets the blob's (one test) */
         const mvt_track_t *tr = &self->tracks[t];
-        if (boxes_overlap(b, s) & (t != self_t) & (tr->id != 0) & (tr->exist_lo > MVT_R(0.0))) {
+        if (mvt_trk_boxes_overlap(b, s) & (t != self_t) & (tr->id != 0) & (tr->exist_lo > MVT_R(0.0))) {
             return 0;
         }
     }

@@ -409,9 +409,8 @@ static int alone_in_blob(const mvt_tracker_t *self, int k, int t, const mvt_real
         if (!(s[2] > s[0])) {
             continue; /* no body there */
         }
-        /* one test, not six (branches the data decide are mispredicted often) */
-        if ((j != t) & (self->tracks[j].id != 0) & (box[0] < s[2]) & (s[0] < box[2]) & (box[1] < s[3]) &
-            (s[1] < box[3])) {
+        /* one test, not several (branches the data decide are mispredicted often) */
+        if ((j != t) & (self->tracks[j].id != 0) & mvt_trk_boxes_overlap(box, s)) {
             return 0;
         }
     }

@@ -85,6 +85,12 @@ mvt_real mvt_trk_mahalanobis3(const mvt_real a[3], const mvt_real Pa[9], const m
 int mvt_trk_box_ok(const mvt_real b[4]);
 /* Image point uv lies in usable box b widened by slack_u, slack_v pixels. */
 int mvt_trk_in_box(const mvt_real b[4], const mvt_real uv[2], mvt_real slack_u, mvt_real slack_v);
+/* Boxes a and b (u0, v0, u1, v1) overlap. Written without short-circuits: each would be a branch
+ * that the data decide, which the processor mispredicts often. */
+static inline int mvt_trk_boxes_overlap(const mvt_real a[4], const mvt_real b[4])
+{
+    return (a[0] < b[2]) & (b[0] < a[2]) & (a[1] < b[3]) & (b[1] < a[3]);
+}
 
 /* The Gaussian density (1/px^2) of an innovation, N(y; 0, S); 0 when S is not positive definite. */
 mvt_real mvt_trk_density(const mvt_pkf_innov_t *in);
