@@ -848,6 +848,9 @@ void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_rea
             const mvt_real alt = lambda + (other > MVT_R(0.0) ? other : MVT_R(0.0)); /* clutter or another's piece */
             const int gated = mvt_body_gated(self, t, k, d, &in);
             tr->exist_lo += MVT_LOG(MVT_R(1.0) - p + p * mvt_body_head_density(self, &in, gated) / alt);
+            if (projective) {
+                mvt_trk_onset_seen(self, tr, k, &in, self->meas[k][d].ideal, gated);
+            }
             if (!gated) {
                 self->counters.gated_out++; /* displaced: evidence of the person, not of where */
                 if (merged_with(ws->sil[k][t], ws->head[t], view->det[d].box) && !tracked_top(self, view, k, d, t)) {
@@ -869,6 +872,7 @@ void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_rea
                 const mvt_real x0[3] = {tr->s.x[0], tr->s.x[1], tr->s.x[2]};
                 err = mvt_trk_update_head(self, tr, k, &in, NULL, pk > MVT_R(0.0) && p < pk ? p / pk : MVT_R(1.0),
                                           feet ? feet_ratio(self, tr, k, &in, &fin) : MVT_R(1.0));
+                mvt_trk_onset_judged(tr, k);
                 if (feet && err == MVT_OK && tr->view[k].p < MVT_R(0.5)) {
                     update_feet(self, tr, k, &fin, x0);
                 }

@@ -134,14 +134,22 @@ static int seen_height_ok(const mvt_tracker_config_t *c, const mvt_track_t *tr)
            tr->z_var >= MVT_R(0.0) && tr->z_var <= MVT_PERSIST_MAX_VAR;
 }
 
-/* Each camera's memory of displacement (mvt_imm_view_t): a probability, a finite offset no larger
- * than a picture could hold, a time no later than the state's. */
+/* Each camera's memory of displacement (mvt_imm_view_t) and the displacement it holds from an
+ * onset (mvt_trk_onset_t): probabilities, finite pixels no larger than a picture could hold, times no
+ * later than the state's (an onset's last detection included), a time since its confirmation that
+ * is a time. */
 static int views_ok(const mvt_track_t *tr, int64_t now)
 {
     for (int k = 0; k < MVT_MAX_CAMERAS; k++) {
         const mvt_imm_view_t *v = &tr->view[k];
+        const mvt_trk_onset_t *o = &tr->onset[k];
         if (!(v->p >= MVT_R(0.0) && v->p <= MVT_R(1.0)) || !(MVT_FABS(v->y[0]) <= MVT_PERSIST_MAX_PX) ||
-            !(MVT_FABS(v->y[1]) <= MVT_PERSIST_MAX_PX) || !time_ok(v->utime_us, now)) {
+            !(MVT_FABS(v->y[1]) <= MVT_PERSIST_MAX_PX) || !time_ok(v->utime_us, now) ||
+            !(MVT_FABS(o->head[0]) <= MVT_PERSIST_MAX_PX) || !(MVT_FABS(o->head[1]) <= MVT_PERSIST_MAX_PX) ||
+            !(MVT_FABS(o->y[0]) <= MVT_PERSIST_MAX_PX) || !(MVT_FABS(o->y[1]) <= MVT_PERSIST_MAX_PX) ||
+            !(o->p >= MVT_R(0.0) && o->p <= MVT_R(1.0)) || !(o->seen_s >= MVT_R(0.0) && o->seen_s <= MVT_R(1e6)) ||
+            (o->confirmed_us != 0 && !(time_ok(o->confirmed_us, now) &&
+                                       (mvt_real)(now - o->confirmed_us) * MVT_R(1e-6) >= o->seen_s))) {
             return 0;
         }
     }

@@ -207,6 +207,8 @@ mvt_err_t mvt_tracker_step(mvt_tracker_t *self, const mvt_frame_t *frame, mvt_ou
         self->tracks[t].cameras_used = 0u;
         self->tracks[t].cameras_placed_prev = self->tracks[t].cameras_placed;
         self->tracks[t].cameras_placed = 0u;
+        self->tracks[t].heads_prev = self->tracks[t].heads;
+        self->tracks[t].heads = 0u;
     }
     mvt_body_step(self, frame, order, n_order, dt);
     if (out != NULL) {

@@ -226,6 +226,18 @@ typedef struct mvt_app {
     mvt_real n;                 /* detections behind m (weighted, at most MVT_TRK_APP_NMAX) */
 } mvt_app_t;
 
+/* One view's detections of a track beyond what the filter's memory holds (mvt_trk_onset_seen):
+ * where its last head detection lay, and a displacement of that view seen to begin (the detection
+ * jumped off the head while two other views placed the person), which stands in for the view's
+ * memory while fewer views place the person. */
+typedef struct mvt_trk_onset {
+    mvt_real head[2];     /* the view's last head detection of the track, ideal pixels */
+    mvt_real y[2];        /* the displacement's last offset from the predicted head, px */
+    mvt_real p;           /* P(displaced) when two other views last placed the person */
+    mvt_real seen_s;      /* its last detection, seconds after that */
+    int64_t confirmed_us; /* that time; 0: no displacement held */
+} mvt_trk_onset_t;
+
 typedef struct mvt_track {
     int32_t id;                 /* 0: free slot */
     int32_t status;
@@ -246,6 +258,9 @@ typedef struct mvt_track {
     uint32_t cameras_placed_prev; /* ... the frame before */
     mvt_imm_view_t view[MVT_MAX_CAMERAS]; /* per camera: was its last detection displaced, and by
                                              how much (mvt_imm_update_view) */
+    uint32_t heads;             /* this frame: cameras with a head detection of it (explain's) */
+    uint32_t heads_prev;        /* ... the frame before */
+    mvt_trk_onset_t onset[MVT_MAX_CAMERAS]; /* per camera: its last head, a displacement seen to begin */
     mvt_real exist_lo;          /* log odds that its person is in the volume */
     int32_t dormant;            /* 1 when its existence fell under population.exist_delete
                                    after it was shown: its label waits MVT_BODY_DORMANT_S for the

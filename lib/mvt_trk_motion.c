@@ -5,6 +5,7 @@
  * acts on every model and tr->s is their combination, which is what the body model's steps and
  * the output read.
  */
+#include <math.h>
 #include <string.h>
 
 #include "mvt_linalg.h"
@@ -13,6 +14,12 @@
 static int single(const mvt_tracker_t *self)
 {
     return self->cfg.motion.n == 1 && mvt_imm_model_is(&self->cfg.motion.model[0], MVT_MOTION_CV);
+}
+
+/* Cameras other than k that placed tr (updated it as the person's) this frame or the one before. */
+static uint32_t placed_by_others(const mvt_track_t *tr, int k)
+{
+    return (tr->cameras_placed | tr->cameras_placed_prev) & ~(1u << k);
 }
 
 void mvt_trk_start(mvt_tracker_t *self, mvt_track_t *tr, const mvt_real x[3], const mvt_real cov[9], int64_t utime_us)
@@ -42,6 +49,94 @@ void mvt_trk_predict_pos(mvt_tracker_t *self, mvt_track_t *tr, int64_t utime_us)
     }
 }
 
+/* Whether camera k's detection z jumped off the view's last one: beyond the chi-square gate of
+ * two points' noise (2R) and the head's motion in the picture over a frame (the estimate's velocity
+ * and its spread, through the head's Jacobian in). */
+static int head_jumped(const mvt_tracker_t *self, const mvt_track_t *tr, int k, const mvt_pkf_innov_t *in,
+                       const mvt_real z[2])
+{
+    const mvt_real dt = self->frame_dt_s;
+    const mvt_real *H = in->H, *P = tr->s.P, *v = &tr->s.x[3];
+    mvt_real e[2], hp[2][3];
+    for (int r = 0; r < 2; r++) {
+        const mvt_real *h = &H[r * 3];
+        e[r] = z[r] - tr->onset[k].head[r] - dt * (h[0] * v[0] + h[1] * v[1] + h[2] * v[2]);
+        for (int c = 0; c < 3; c++) {
+            hp[r][c] = h[0] * P[3 * 6 + 3 + c] + h[1] * P[4 * 6 + 3 + c] + h[2] * P[5 * 6 + 3 + c];
+        }
+    }
+    const mvt_real dt2 = dt * dt;
+    const mvt_real s00 = MVT_R(2.0) * in->r + dt2 * (hp[0][0] * H[0] + hp[0][1] * H[1] + hp[0][2] * H[2]);
+    const mvt_real s01 = dt2 * (hp[0][0] * H[3] + hp[0][1] * H[4] + hp[0][2] * H[5]);
+    const mvt_real s11 = MVT_R(2.0) * in->r + dt2 * (hp[1][0] * H[3] + hp[1][1] * H[4] + hp[1][2] * H[5]);
+    const mvt_real det = s00 * s11 - s01 * s01;
+    if (!(det > MVT_R(0.0))) {
+        return 0;
+    }
+    const mvt_real d2 = (s11 * e[0] * e[0] - MVT_R(2.0) * s01 * e[0] * e[1] + s00 * e[1] * e[1]) / det;
+    return d2 > self->cfg.numerics.gate_chi2;
+}
+
+void mvt_trk_onset_seen(mvt_tracker_t *self, mvt_track_t *tr, int k, const mvt_pkf_innov_t *in, const mvt_real z[2],
+                        int gated)
+{
+    mvt_trk_onset_t *o = &tr->onset[k];
+    const uint32_t bit = 1u << k;
+    const int confirmed = mvt_trk_popcount(placed_by_others(tr, k)) >= 2;
+    const int jumped = (tr->heads_prev & bit) && tr->view[k].p < MVT_R(0.5) && confirmed && head_jumped(self, tr, k, in, z);
+    o->head[0] = z[0];
+    o->head[1] = z[1];
+    tr->heads |= bit;
+    if (gated || single(self) || !(self->cfg.motion.outlier_persist_s > MVT_R(0.0))) {
+        return; /* a detection inside the gate is judged by the update (mvt_trk_onset_judged) */
+    }
+    const int64_t now = tr->s.utime_us;
+    if (jumped) {
+        o->p = MVT_R(1.0) - self->cfg.motion.p_outlier;
+    } else if (o->confirmed_us != 0) {
+        /* does it continue the held displacement: within two points' noise and the drift since? */
+        const mvt_real dt = (mvt_real)(now - o->confirmed_us) * MVT_R(1e-6) - o->seen_s;
+        const mvt_real e0 = in->y[0] - o->y[0], e1 = in->y[1] - o->y[1];
+        const mvt_real var = MVT_R(2.0) * in->r + self->cfg.motion.outlier_drift_px2_s * dt;
+        if (!((e0 * e0 + e1 * e1) / var <= self->cfg.numerics.gate_chi2)) {
+            o->confirmed_us = 0; /* another displacement, or none: the memory judges it */
+            return;
+        }
+    } else {
+        return;
+    }
+    o->y[0] = in->y[0];
+    o->y[1] = in->y[1];
+    if (jumped || confirmed) {
+        o->confirmed_us = now;
+        o->seen_s = MVT_R(0.0);
+    } else {
+        o->seen_s = (mvt_real)(now - o->confirmed_us) * MVT_R(1e-6);
+    }
+}
+
+void mvt_trk_onset_judged(mvt_track_t *tr, int k)
+{
+    mvt_trk_onset_t *o = &tr->onset[k];
+    const mvt_imm_view_t *v = &tr->view[k];
+    if (o->confirmed_us == 0) {
+        return;
+    }
+    if (!(v->p >= MVT_R(0.5))) {
+        o->confirmed_us = 0; /* the head again: the displacement has ended */
+        return;
+    }
+    o->y[0] = v->y[0];
+    o->y[1] = v->y[1];
+    if (mvt_trk_popcount(placed_by_others(tr, k)) >= 2) {
+        o->p = v->p;
+        o->confirmed_us = v->utime_us;
+        o->seen_s = MVT_R(0.0);
+    } else {
+        o->seen_s = (mvt_real)(v->utime_us - o->confirmed_us) * MVT_R(1e-6);
+    }
+}
+
 void mvt_trk_settle(mvt_tracker_t *self, mvt_track_t *tr)
 {
     if (!single(self)) {
@@ -67,10 +162,20 @@ mvt_err_t mvt_trk_update_head(mvt_tracker_t *self, mvt_track_t *tr, int k, const
     /* A view's detection may be judged displaced as its last one was only while two other views
      * place the person (this frame or the one before): with fewer, the track's own error looks
      * like a lasting displacement (one view leaves the depth free), and the track would stop
-     * following its person. Measured in docs/filters.md (Lasting displacements). */
-    const uint32_t others = (tr->cameras_placed | tr->cameras_placed_prev) & ~(1u << k);
-    if (mvt_trk_popcount(others) < 2) {
-        tr->view[k].p = MVT_R(0.0);
+     * following its person. A displacement seen to begin while two views placed the person is not
+     * the track's error: it stands in, as likely as it was when two views last confirmed it times
+     * the chance that it has lasted since. Measured in docs/filters.md (Lasting displacements). */
+    if (mvt_trk_popcount(placed_by_others(tr, k)) < 2) {
+        const mvt_trk_onset_t *o = &tr->onset[k];
+        if (o->confirmed_us != 0) {
+            mvt_imm_view_t *v = &tr->view[k];
+            v->p = o->p * MVT_EXP(-o->seen_s / self->cfg.motion.outlier_persist_s);
+            v->y[0] = o->y[0];
+            v->y[1] = o->y[1];
+            v->utime_us = o->confirmed_us + (int64_t)(o->seen_s * MVT_R(1e6));
+        } else {
+            tr->view[k].p = MVT_R(0.0);
+        }
     }
     if (shown < MVT_R(1.0)) {
         /* the head shows with probability `shown`; otherwise the point is another part of the body */
