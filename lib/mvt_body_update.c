@@ -9,7 +9,10 @@
  * shows as a top of its own with probability p / p_detect) takes its blob with the motion model's
  * prior of a displaced point raised to 1 - (p / p_detect) (1 - p_outlier): such a blob's top is
  * more often where the nearer body's outline ends, or the merged region's, than the head. How often
- * hidden heads still show is learnt per camera (learn_detection).
+ * hidden heads still show is learnt per camera (learn_detection). Every head is noted per view
+ * (mvt_trk_onset_seen): one that jumped off the view's last while two other views placed the person
+ * begins a displacement of that view, which stands in for the view's memory of displacement while
+ * fewer views place the person (mvt_trk_update_head).
  * The feet: where the blob's bottom shows them (feet_shown: visible, the body standing in the
  * picture, nothing of it below the blob), it weighs whether the top is the head or displaced
  * (feet_ratio: a displaced blob carries its bottom with its top, or its bottom is the body's feet
@@ -872,7 +875,9 @@ void mvt_body_update(mvt_tracker_t *self, const mvt_view_t *view, int k, mvt_rea
                 const mvt_real x0[3] = {tr->s.x[0], tr->s.x[1], tr->s.x[2]};
                 err = mvt_trk_update_head(self, tr, k, &in, NULL, pk > MVT_R(0.0) && p < pk ? p / pk : MVT_R(1.0),
                                           feet ? feet_ratio(self, tr, k, &in, &fin) : MVT_R(1.0));
-                mvt_trk_onset_judged(tr, k);
+                if (err == MVT_OK) {
+                    mvt_trk_onset_judged(tr, k);
+                }
                 if (feet && err == MVT_OK && tr->view[k].p < MVT_R(0.5)) {
                     update_feet(self, tr, k, &fin, x0);
                 }

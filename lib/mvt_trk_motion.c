@@ -49,18 +49,18 @@ void mvt_trk_predict_pos(mvt_tracker_t *self, mvt_track_t *tr, int64_t utime_us)
     }
 }
 
-/* Whether camera k's detection z jumped off the view's last one: beyond the chi-square gate of
+/* Whether a view's detection z jumped off its last one: beyond the chi-square gate of
  * two points' noise (2R) and the head's motion in the picture over a frame (the estimate's velocity
  * and its spread, through the head's Jacobian in). */
-static int head_jumped(const mvt_tracker_t *self, const mvt_track_t *tr, int k, const mvt_pkf_innov_t *in,
-                       const mvt_real z[2])
+static int head_jumped(const mvt_tracker_t *self, const mvt_track_t *tr, const mvt_pkf_innov_t *in,
+                       const mvt_real last[2], const mvt_real z[2])
 {
     const mvt_real dt = self->frame_dt_s;
     const mvt_real *H = in->H, *P = tr->s.P, *v = &tr->s.x[3];
     mvt_real e[2], hp[2][3];
     for (int r = 0; r < 2; r++) {
         const mvt_real *h = &H[r * 3];
-        e[r] = z[r] - tr->onset[k].head[r] - dt * (h[0] * v[0] + h[1] * v[1] + h[2] * v[2]);
+        e[r] = z[r] - last[r] - dt * (h[0] * v[0] + h[1] * v[1] + h[2] * v[2]);
         for (int c = 0; c < 3; c++) {
             hp[r][c] = h[0] * P[3 * 6 + 3 + c] + h[1] * P[4 * 6 + 3 + c] + h[2] * P[5 * 6 + 3 + c];
         }
@@ -82,14 +82,16 @@ void mvt_trk_onset_seen(mvt_tracker_t *self, mvt_track_t *tr, int k, const mvt_p
 {
     mvt_trk_onset_t *o = &tr->onset[k];
     const uint32_t bit = 1u << k;
-    const int confirmed = mvt_trk_popcount(placed_by_others(tr, k)) >= 2;
-    const int jumped = (tr->heads_prev & bit) && tr->view[k].p < MVT_R(0.5) && confirmed && head_jumped(self, tr, k, in, z);
+    const int before = (tr->heads_prev & bit) != 0u;
+    const mvt_real last[2] = {o->head[0], o->head[1]};
     o->head[0] = z[0];
     o->head[1] = z[1];
     tr->heads |= bit;
     if (gated || single(self) || !(self->cfg.motion.outlier_persist_s > MVT_R(0.0))) {
         return; /* a detection inside the gate is judged by the update (mvt_trk_onset_judged) */
     }
+    const int confirmed = mvt_trk_popcount(placed_by_others(tr, k)) >= 2;
+    const int jumped = before && tr->view[k].p < MVT_R(0.5) && confirmed && head_jumped(self, tr, in, last, z);
     const int64_t now = tr->s.utime_us;
     if (jumped) {
         o->p = MVT_R(1.0) - self->cfg.motion.p_outlier;
@@ -167,7 +169,7 @@ mvt_err_t mvt_trk_update_head(mvt_tracker_t *self, mvt_track_t *tr, int k, const
      * the chance that it has lasted since. Measured in docs/filters.md (Lasting displacements). */
     if (mvt_trk_popcount(placed_by_others(tr, k)) < 2) {
         const mvt_trk_onset_t *o = &tr->onset[k];
-        if (o->confirmed_us != 0) {
+        if (o->confirmed_us != 0 && self->cfg.motion.outlier_persist_s > MVT_R(0.0)) {
             mvt_imm_view_t *v = &tr->view[k];
             v->p = o->p * MVT_EXP(-o->seen_s / self->cfg.motion.outlier_persist_s);
             v->y[0] = o->y[0];
