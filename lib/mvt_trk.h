@@ -114,12 +114,13 @@ mvt_err_t mvt_trk_update_head(mvt_tracker_t *self, mvt_track_t *tr, int k, const
                               const mvt_real *extra_px2, mvt_real shown, mvt_real own_lr);
 void mvt_trk_settle(mvt_tracker_t *self, mvt_track_t *tr);
 /* Camera k's head detection of tr at z (ideal pixels; in: its innovation, before any update;
- * gated: inside the gate). A detection that jumped off the head since the view's last one (further
- * than the head's picture moves in a frame, with both points' noise) while two other views place
- * the person begins a displacement of that view; one beyond the gate that continues it (within its
- * drift) keeps it, and two other views placing the person confirm it. mvt_trk_update_head uses it
- * as the view's memory while fewer views place the person, its probability fading from the last
- * confirmation as displacements end (outlier_persist_s). */
+ * gated: inside the gate). One beyond the gate that jumped off the view's last detection (further
+ * than the head's picture moves in a frame, with both points' noise), which the view's memory took
+ * for the head, while two other views place the person, begins a displacement of that view; one
+ * beyond the gate that continues it (within its drift) keeps it, and two other views placing the
+ * person confirm it. mvt_trk_update_head uses it as the view's memory while fewer views place the
+ * person, its probability fading from the last confirmation as displacements end
+ * (outlier_persist_s). */
 void mvt_trk_onset_seen(mvt_tracker_t *self, mvt_track_t *tr, int k, const mvt_pkf_innov_t *in, const mvt_real z[2],
                         int gated);
 /* After mvt_trk_update_head of camera k: the view's memory judged its detection displaced (the held
