@@ -149,7 +149,7 @@ static int views_ok(const mvt_track_t *tr, int64_t now)
             !(MVT_FABS(o->y[0]) <= MVT_PERSIST_MAX_PX) || !(MVT_FABS(o->y[1]) <= MVT_PERSIST_MAX_PX) ||
             !(o->p >= MVT_R(0.0) && o->p <= MVT_R(1.0)) || !(o->seen_s >= MVT_R(0.0) && o->seen_s <= MVT_R(1e6)) ||
             (o->confirmed_us != 0 && !(time_ok(o->confirmed_us, now) &&
-                                       (mvt_real)(now - o->confirmed_us) * MVT_R(1e-6) >= o->seen_s))) {
+                                       mvt_us_to_s(now - o->confirmed_us) >= o->seen_s))) {
             return 0;
         }
     }

@@ -97,7 +97,7 @@ void mvt_trk_onset_seen(mvt_tracker_t *self, mvt_track_t *tr, int k, const mvt_p
         o->p = MVT_R(1.0) - self->cfg.motion.p_outlier;
     } else if (o->confirmed_us != 0) {
         /* does it continue the held displacement: within two points' noise and the drift since? */
-        const mvt_real dt = (mvt_real)(now - o->confirmed_us) * MVT_R(1e-6) - o->seen_s;
+        const mvt_real dt = mvt_us_to_s(now - o->confirmed_us) - o->seen_s;
         const mvt_real e0 = in->y[0] - o->y[0], e1 = in->y[1] - o->y[1];
         const mvt_real var = MVT_R(2.0) * in->r + self->cfg.motion.outlier_drift_px2_s * dt;
         if (!((e0 * e0 + e1 * e1) / var <= self->cfg.numerics.gate_chi2)) {
@@ -113,7 +113,7 @@ void mvt_trk_onset_seen(mvt_tracker_t *self, mvt_track_t *tr, int k, const mvt_p
         o->confirmed_us = now;
         o->seen_s = MVT_R(0.0);
     } else {
-        o->seen_s = (mvt_real)(now - o->confirmed_us) * MVT_R(1e-6);
+        o->seen_s = mvt_us_to_s(now - o->confirmed_us);
     }
 }
 
@@ -135,7 +135,7 @@ void mvt_trk_onset_judged(mvt_track_t *tr, int k)
         o->confirmed_us = v->utime_us;
         o->seen_s = MVT_R(0.0);
     } else {
-        o->seen_s = (mvt_real)(v->utime_us - o->confirmed_us) * MVT_R(1e-6);
+        o->seen_s = mvt_us_to_s(v->utime_us - o->confirmed_us);
     }
 }
 
