@@ -209,18 +209,21 @@ static void learn_feet(mvt_tracker_t *self, const mvt_track_t *tr, int t, const 
 
 static void mark_placed(mvt_track_t *tr, int k);
 
-/* Track t's heads this frame, in three or more views, two or more of them displaced (beyond the
- * gate), that all meet at one point at a person's height, away from the track: the views agree on
- * where the person is, and the track is elsewhere (born along one view's ray at the wrong distance,
- * or pinned there by a box whose bottom is not the feet). Displacements are independent per view
- * (an occluder's burst, a merged blob), so three views that agree to their pixel noise are not
- * displaced: the track starts again at their point, keeping its identity (mvt_body_regather asks
- * this only of a track whose place has rested on one view for a while). */
-static int heads_agree_elsewhere(mvt_tracker_t *self, mvt_track_t *tr, int t)
+/* Track t's heads this frame, two or more of them displaced (beyond the gate), that meet at one point
+ * at a person's height, away from the track, with every view that places the track there too: three
+ * or more views that agree to their pixel noise (agree[0..m), their point x and its covariance).
+ * A displaced head lands anywhere in the outlier radius, so displaced heads that agree with a third
+ * view to a few pixels say the person is there; the views that place the track elsewhere then took
+ * something else for its head (a piece of its body, another person's top), as unlikely per view, so
+ * the agreeing displaced views must outnumber them. 1 when they agree so; n_disp_out and n_out_out:
+ * how many were displaced, and how many placing views disagree. */
+static int heads_agree_elsewhere(mvt_tracker_t *self, const mvt_track_t *tr, int t, mvt_tri_obs_t agree[MVT_MAX_CAMERAS],
+                                 int *m_out, int *n_disp_out, int *n_out_out, mvt_real x[3], mvt_real cov[9])
 {
     const mvt_tracker_config_t *c = &self->cfg;
     mvt_tri_obs_t obs[MVT_MAX_CAMERAS];
-    int n = 0, n_used = 0;
+    uint8_t placed[MVT_MAX_CAMERAS];
+    int n = 0, n_disp = 0;
     for (int k = 0; k < self->num_cameras; k++) {
         for (int d = 0; d < self->num_meas[k]; d++) {
             if (self->body.head_of[k][d] != t || !self->meas_ok[k][d]) {
@@ -230,34 +233,56 @@ static int heads_agree_elsewhere(mvt_tracker_t *self, mvt_track_t *tr, int t)
             obs[n].xn[0] = self->meas[k][d].xn[0];
             obs[n].xn[1] = self->meas[k][d].xn[1];
             obs[n].var_px2 = self->meas[k][d].var_px2;
-            n_used += (int)((tr->cameras_used >> (unsigned)k) & 1u);
+            placed[n] = (uint8_t)((tr->cameras_used >> (unsigned)k) & 1u);
+            n_disp += !placed[n];
             n++;
             break;
         }
     }
-    if (n < 3 || n_used < 1 || n - n_used < 2) {
+    if (n_disp < 2) {
         return 0;
     }
-    mvt_real x[3], cov[9];
-    if (mvt_tri_linear(self->cams, obs, n, x) != MVT_OK || mvt_tri_refine(self->cams, obs, n, 5, x) != MVT_OK) {
+    /* the displaced views first (their point), then the placing views that agree with it */
+    int m = 0;
+    for (int i = 0; i < n; i++) {
+        if (!placed[i]) {
+            agree[m++] = obs[i];
+        }
+    }
+    if (mvt_tri_linear(self->cams, agree, m, x) != MVT_OK || mvt_tri_refine(self->cams, agree, m, 5, x) != MVT_OK) {
+        return 0;
+    }
+    int n_out = 0;
+    for (int i = 0; i < n; i++) {
+        if (!placed[i]) {
+            continue;
+        }
+        const mvt_real r = mvt_tri_reproj_px(self->cams, &obs[i], x);
+        if (r * r <= c->numerics.gate_chi2 * obs[i].var_px2) {
+            agree[m++] = obs[i];
+        } else {
+            n_out++;
+        }
+    }
+    if (m < 3 || n_disp <= n_out || mvt_tri_refine(self->cams, agree, m, 5, x) != MVT_OK) {
         return 0;
     }
     /* the views' pixel noise alone: the weighted squared residuals within chi-square's 1 % point
-     * for 2n - 3 degrees of freedom (n views) */
+     * for 2m - 3 degrees of freedom (m views) */
     static const mvt_real chi2_1pc[17] = {MVT_R(0.0),  MVT_R(0.0),  MVT_R(0.0),  MVT_R(11.3), MVT_R(15.1), MVT_R(18.5),
                                           MVT_R(21.7), MVT_R(24.7), MVT_R(27.7), MVT_R(30.6), MVT_R(33.4), MVT_R(36.2),
                                           MVT_R(38.9), MVT_R(41.6), MVT_R(44.3), MVT_R(47.0), MVT_R(49.6)};
     mvt_real r2 = MVT_R(0.0);
-    for (int i = 0; i < n; i++) {
-        const mvt_real r = mvt_tri_reproj_px(self->cams, &obs[i], x);
-        r2 += r * r / obs[i].var_px2;
+    for (int i = 0; i < m; i++) {
+        const mvt_real r = mvt_tri_reproj_px(self->cams, &agree[i], x);
+        r2 += r * r / agree[i].var_px2;
     }
-    if (n > 16 || !(r2 <= chi2_1pc[n])) {
+    if (m > 16 || !(r2 <= chi2_1pc[m])) {
         return 0;
     }
     const mvt_real dz = x[2] - c->body.head_height_m;
     if (!(MVT_FABS(dz) <= MVT_R(3.0) * c->body.head_height_sd_m) || !mvt_trk_inside_volume(c, x) ||
-        mvt_tri_covariance(self->cams, obs, n, x, cov) != MVT_OK) {
+        mvt_tri_covariance(self->cams, agree, m, x, cov) != MVT_OK) {
         return 0;
     }
     /* away from the track: beyond the chi-square gate of its position's own spread (3 dof, 1 %) */
@@ -270,33 +295,45 @@ static int heads_agree_elsewhere(mvt_tracker_t *self, mvt_track_t *tr, int t)
     if (!(mvt_trk_mahalanobis3(tr->s.x, Pt, x, cov, NULL) > MVT_R(11.3))) {
         return 0; /* within it, or a singular spread (< 0) */
     }
+    *m_out = m;
+    *n_disp_out = n_disp;
+    *n_out_out = n_out;
+    return 1;
+}
+
+/* Track tr starts again at the point x (covariance cov) that the views agree[0..m) place it at,
+ * keeping its identity: what this frame's views said is now theirs. The agreeing ones placed it,
+ * undisplaced (their memories start again); the others' updates went into the estimate left
+ * behind. */
+static void regather(mvt_tracker_t *self, mvt_track_t *tr, const mvt_tri_obs_t agree[], int m, const mvt_real x[3],
+                     const mvt_real cov[9])
+{
     mvt_trk_start(self, tr, x, cov, tr->s.utime_us);
     mvt_body_height_start(tr, x[2], cov[8]);
-    for (int i = 0; i < n; i++) {
-        mark_placed(tr, obs[i].cam);
+    tr->cameras_used = 0u;
+    tr->cameras_placed = 0u;
+    for (int i = 0; i < m; i++) {
+        const int k = agree[i].cam;
+        tr->view[k].p = MVT_R(0.0);
+        tr->view[k].y[0] = tr->view[k].y[1] = MVT_R(0.0);
+        tr->view[k].utime_us = tr->s.utime_us;
+        tr->onset[k].confirmed_us = 0;
+        mark_placed(tr, k);
     }
-    return 1;
+    tr->one_view_s = MVT_R(0.0);
+    tr->agree_s = MVT_R(0.0);
 }
 
 void mvt_body_regather(mvt_tracker_t *self, mvt_real dt)
 {
-    /* a track whose place rested on one view for longer than a view's displacement lasts (twice
-     * its mean duration, outlier_persist_s: 0.5 s) may stand elsewhere along that view's ray; one
-     * that two views placed since is where their rays meet, and views that agree elsewhere then
-     * are more likely displaced together for a while (bursts that happen to meet) */
-    const mvt_real wait_s = MVT_R(2.0) * self->cfg.motion.outlier_persist_s;
-    int waited = 0;
-    for (int t = 0; t < MVT_MAX_TARGETS; t++) {
-        mvt_track_t *tr = &self->tracks[t];
-        if (tr->id != 0) {
-            tr->one_view_s = mvt_trk_popcount(tr->cameras_placed) >= 2 ? MVT_R(0.0) : tr->one_view_s + dt;
-            waited |= !tr->dormant && tr->one_view_s >= wait_s;
-        }
-    }
-    if (!waited) {
-        return; /* the usual frame: every track placed by two views within the wait */
-    }
-    /* heads per track and how many of them were judged displaced, in one pass over the blobs */
+    /* n independent displacements, each lasting outlier_persist_s on average (exponentially), last
+     * together outlier_persist_s / n on average: views whose displaced heads agree elsewhere for
+     * longer than that, net of the frames they did not, are believed. Pieces of one body cut alike in
+     * every view (a torso's top under a head of the background's colour) agree for a moment, a
+     * person the track left agrees frame after frame. A track whose place rested on one view for
+     * twice a displacement's mean duration (it may stand anywhere along that view's ray) believes at
+     * once heads that all agree, the placing view's too. */
+    const mvt_real persist_s = self->cfg.motion.outlier_persist_s;
     int heads[MVT_MAX_TARGETS] = {0}, displaced[MVT_MAX_TARGETS] = {0};
     for (int k = 0; k < self->num_cameras; k++) {
         for (int d = 0; d < self->num_meas[k]; d++) {
@@ -309,9 +346,22 @@ void mvt_body_regather(mvt_tracker_t *self, mvt_real dt)
     }
     for (int t = 0; t < MVT_MAX_TARGETS; t++) {
         mvt_track_t *tr = &self->tracks[t];
-        if (tr->id != 0 && !tr->dormant && tr->one_view_s >= wait_s && heads[t] >= 3 && displaced[t] >= 2 &&
-            heads[t] > displaced[t] && heads_agree_elsewhere(self, tr, t)) {
-            tr->one_view_s = MVT_R(0.0);
+        if (tr->id == 0) {
+            continue;
+        }
+        tr->one_view_s = mvt_trk_popcount(tr->cameras_placed) >= 2 ? MVT_R(0.0) : tr->one_view_s + dt;
+        mvt_tri_obs_t agree[MVT_MAX_CAMERAS];
+        mvt_real x[3], cov[9];
+        int m = 0, n_disp = 0, n_out = 0;
+        if (tr->dormant || heads[t] < 3 || displaced[t] < 2 ||
+            !heads_agree_elsewhere(self, tr, t, agree, &m, &n_disp, &n_out, x, cov)) {
+            tr->agree_s = tr->agree_s > dt ? tr->agree_s - dt : MVT_R(0.0);
+            continue;
+        }
+        tr->agree_s += dt;
+        if (tr->agree_s >= persist_s / (mvt_real)n_disp ||
+            (n_out == 0 && tr->one_view_s >= MVT_R(2.0) * persist_s)) {
+            regather(self, tr, agree, m, x, cov);
         }
     }
 }

@@ -435,7 +435,7 @@ static void test_mvt_tracker_resume_continues_and_refuses_bad_state(void **state
     /* one bad value anywhere: refused, the tracker unchanged */
     int live = 0;
     while (g_saved.tracks[live].id == 0) live++;
-    for (int c = 0; c < 26; c++) {
+    for (int c = 0; c < 27; c++) {
         mvt_tracker_save(&g_tracker2, &g_saved);
         g_bad = g_saved;
         mvt_track_t *tr = &g_bad.tracks[live];
@@ -457,7 +457,8 @@ static void test_mvt_tracker_resume_continues_and_refuses_bad_state(void **state
         case 22: tr->onset[1].p = -0.5f; break;                  /* a held displacement: no probability, */
         case 23: tr->onset[2].head[1] = NAN; break;              /* a head that is no number, */
         case 24: tr->onset[0].confirmed_us = g_bad.last_utime_us + 1; break; /* confirmed after the clock, */
-        case 25: tr->onset[3].seen_s = -1.0f; break;             /* seen before it was confirmed */
+        case 25: tr->onset[3].seen_s = -1.0f; break;             /* seen before it was confirmed, */
+        case 26: tr->agree_s = NAN; break;                       /* an agreement's time that is no number */
         case 0: tr->s.x[1] = NAN; break;
         case 1: tr->s.P[7] = -1.0f; break;                       /* variance of y negative */
         case 2: tr->s.P[1] = 5.0f; break;                        /* not symmetric */
