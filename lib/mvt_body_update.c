@@ -209,14 +209,36 @@ static void learn_feet(mvt_tracker_t *self, const mvt_track_t *tr, int t, const 
 
 static void mark_placed(mvt_track_t *tr, int k);
 
+/* 1 when views obs[0..m) meet at x within their pixels' noise alone: the weighted squared
+ * residuals within chi-square's 1 % point for 2m - 3 degrees of freedom (m >= 3; two views always
+ * meet as far as this test can tell). worst: the view farthest from x, weighted. */
+static int residuals_agree(const mvt_tracker_t *self, const mvt_tri_obs_t obs[], int m, const mvt_real x[3], int *worst)
+{
+    static const mvt_real chi2_1pc[17] = {MVT_R(0.0),  MVT_R(0.0),  MVT_R(0.0),  MVT_R(11.3), MVT_R(15.1), MVT_R(18.5),
+                                          MVT_R(21.7), MVT_R(24.7), MVT_R(27.7), MVT_R(30.6), MVT_R(33.4), MVT_R(36.2),
+                                          MVT_R(38.9), MVT_R(41.6), MVT_R(44.3), MVT_R(47.0), MVT_R(49.6)};
+    mvt_real r2 = MVT_R(0.0), w2 = MVT_R(-1.0);
+    for (int i = 0; i < m; i++) {
+        const mvt_real r = mvt_tri_reproj_px(self->cams, &obs[i], x);
+        const mvt_real e = r * r / obs[i].var_px2;
+        r2 += e;
+        if (e > w2) {
+            w2 = e;
+            *worst = i;
+        }
+    }
+    return m < 3 || (m <= 16 && r2 <= chi2_1pc[m]);
+}
+
 /* Track t's heads this frame, two or more of them displaced (beyond the gate), that meet at one point
  * at a person's height, away from the track, with every view that places the track there too: three
  * or more views that agree to their pixel noise (agree[0..m), their point x and its covariance).
  * A displaced head lands anywhere in the outlier radius, so displaced heads that agree with a third
  * view to a few pixels say the person is there; the views that place the track elsewhere then took
  * something else for its head (a piece of its body, another person's top), as unlikely per view, so
- * the agreeing displaced views must outnumber them. 1 when they agree so; n_disp_out and n_out_out:
- * how many were displaced, and how many placing views disagree. */
+ * the agreeing displaced views must outnumber them; displaced views that do not meet the others are
+ * displaced by something else, and neither. 1 when they agree so; n_disp_out and n_out_out: how many
+ * displaced views agree, and how many placing views disagree. */
 static int heads_agree_elsewhere(mvt_tracker_t *self, const mvt_track_t *tr, int t, mvt_tri_obs_t agree[MVT_MAX_CAMERAS],
                                  int *m_out, int *n_disp_out, int *n_out_out, mvt_real x[3], mvt_real cov[9])
 {
@@ -242,16 +264,27 @@ static int heads_agree_elsewhere(mvt_tracker_t *self, const mvt_track_t *tr, int
     if (n_disp < 2) {
         return 0;
     }
-    /* the displaced views first (their point), then the placing views that agree with it */
+    /* the displaced views first (their point; while they do not meet within their pixels' noise, the
+     * one farthest from it is displaced by something else, and left out, down to two), then the
+     * placing views that agree with it */
     int m = 0;
     for (int i = 0; i < n; i++) {
         if (!placed[i]) {
             agree[m++] = obs[i];
         }
     }
-    if (mvt_tri_linear(self->cams, agree, m, x) != MVT_OK || mvt_tri_refine(self->cams, agree, m, 5, x) != MVT_OK) {
-        return 0;
+    for (;;) {
+        if (mvt_tri_linear(self->cams, agree, m, x) != MVT_OK || mvt_tri_refine(self->cams, agree, m, 5, x) != MVT_OK) {
+            return 0;
+        }
+        int worst = -1;
+        if (!residuals_agree(self, agree, m, x, &worst) && m > 2) {
+            agree[worst] = agree[--m];
+            continue;
+        }
+        break;
     }
+    const int n_agree_disp = m;
     int n_out = 0;
     for (int i = 0; i < n; i++) {
         if (!placed[i]) {
@@ -264,20 +297,9 @@ static int heads_agree_elsewhere(mvt_tracker_t *self, const mvt_track_t *tr, int
             n_out++;
         }
     }
-    if (m < 3 || n_disp <= n_out || mvt_tri_refine(self->cams, agree, m, 5, x) != MVT_OK) {
-        return 0;
-    }
-    /* the views' pixel noise alone: the weighted squared residuals within chi-square's 1 % point
-     * for 2m - 3 degrees of freedom (m views) */
-    static const mvt_real chi2_1pc[17] = {MVT_R(0.0),  MVT_R(0.0),  MVT_R(0.0),  MVT_R(11.3), MVT_R(15.1), MVT_R(18.5),
-                                          MVT_R(21.7), MVT_R(24.7), MVT_R(27.7), MVT_R(30.6), MVT_R(33.4), MVT_R(36.2),
-                                          MVT_R(38.9), MVT_R(41.6), MVT_R(44.3), MVT_R(47.0), MVT_R(49.6)};
-    mvt_real r2 = MVT_R(0.0);
-    for (int i = 0; i < m; i++) {
-        const mvt_real r = mvt_tri_reproj_px(self->cams, &agree[i], x);
-        r2 += r * r / agree[i].var_px2;
-    }
-    if (m > 16 || !(r2 <= chi2_1pc[m])) {
+    int worst = -1;
+    if (m < 3 || n_agree_disp <= n_out || mvt_tri_refine(self->cams, agree, m, 5, x) != MVT_OK ||
+        !residuals_agree(self, agree, m, x, &worst)) {
         return 0;
     }
     const mvt_real dz = x[2] - c->body.head_height_m;
@@ -296,7 +318,7 @@ static int heads_agree_elsewhere(mvt_tracker_t *self, const mvt_track_t *tr, int
         return 0; /* within it, or a singular spread (< 0) */
     }
     *m_out = m;
-    *n_disp_out = n_disp;
+    *n_disp_out = n_agree_disp;
     *n_out_out = n_out;
     return 1;
 }
