@@ -23,13 +23,16 @@
  * the feet at all, and the feet weigh accordingly. They fix the distance along the head's ray,
  * which one view leaves open and a view's burst can slide.
  * After every camera (mvt_body_regather), a track whose heads in three or more views agree on one
- * point beyond its gate, two or more of them judged displaced and one placing it, starts again at
- * that point: independent displacements do not agree, and one view's distance along its ray (the
- * height prior's, or feet a box misplaced) was wrong. Then (mvt_body_one_view) the person's height:
- * the head's height the last frame two views placed it (or its birth's); a person shown before whom
- * one view places takes it as a measurement of the head's (a walking head's bob about it), and any
- * other track fewer than two views place keeps its head within MVT_BODY_HEIGHT_BAND spreads of it
- * (a truncation): one view's update slides the head along the ray, and the height with it.
+ * point beyond its gate, two or more of them judged displaced, outnumbering the views that place it
+ * elsewhere, starts again at that point once they have agreed longer than that many independent
+ * displacements last together: independent displacements do not agree for long, and the track
+ * was where it was for a wrong reason (one view's distance along its ray, the height prior's or
+ * feet a box misplaced; two views that took other things for its head). Then (mvt_body_one_view)
+ * the person's height: the head's height the last frame two views placed it (or its birth's); a
+ * person shown before whom one view places takes it as a measurement of the head's (a walking
+ * head's bob about it), and any other track fewer than two views place keeps its head within
+ * MVT_BODY_HEIGHT_BAND spreads of it (a truncation): one view's update slides the head along the
+ * ray, and the height with it.
  * Existence (the integrated PDA's recursion with this camera's detection probability p):
  *   head detected with density N (its own, or    odds *= 1 - p + p N / (lambda + phi), phi the
  *   displaced: mvt_body_head_density)            density of other bodies' fragments at the blob

@@ -185,7 +185,8 @@ static int tracker_state_ok(const mvt_tracker_config_t *c, const mvt_tracker_per
         if (tr->id < 0 || !p->have_time || !status_ok(tr->status) || !estimate_ok(c, &tr->s, now) ||
             !time_ok(tr->last_update_us, now) || !bank_ok(c, tr) || !isfinite(tr->exist_lo) ||
             (tr->dormant != 0 && tr->dormant != 1) || (tr->was_shown != 0 && tr->was_shown != 1) ||
-            !(tr->one_view_s >= MVT_R(0.0)) || !isfinite(tr->one_view_s) || !(tr->agree_s >= MVT_R(0.0)) || !isfinite(tr->agree_s) || !seen_height_ok(c, tr) ||
+            !(tr->one_view_s >= MVT_R(0.0)) || !isfinite(tr->one_view_s) || !(tr->agree_s >= MVT_R(0.0)) ||
+            !isfinite(tr->agree_s) || !seen_height_ok(c, tr) ||
             !mvt_trk_app_ok(&tr->app) || !views_ok(tr, now)) {
             return 0;
         }

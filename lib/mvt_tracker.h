@@ -268,8 +268,8 @@ typedef struct mvt_track {
     int32_t was_shown;          /* 1 once it has been shown confirmed */
     mvt_real one_view_s;        /* seconds since two or more views last placed it
                                    in one frame (since its birth when none ever did) */
-    mvt_real agree_s;           /* seconds its displaced heads have agreed on a point elsewhere,
-                                   frame after frame (mvt_body_regather) */
+    mvt_real agree_s;           /* seconds its displaced heads agreed on a point elsewhere, less
+                                   the seconds they did not, never below 0 (mvt_body_regather) */
 } mvt_track_t;
 
 /* Multi-view birth candidates examined per frame (the best are kept; the excess is counted). */
