@@ -280,12 +280,11 @@ static int heads_agree_elsewhere(mvt_tracker_t *self, const mvt_track_t *tr, int
         if (mvt_tri_linear(self->cams, agree, m, x) != MVT_OK || mvt_tri_refine(self->cams, agree, m, 5, x) != MVT_OK) {
             return 0;
         }
-        int worst = -1;
-        if (!residuals_agree(self, agree, m, x, &worst) && m > 2) {
-            agree[worst] = agree[--m];
-            continue;
+        int worst = 0;
+        if (residuals_agree(self, agree, m, x, &worst)) {
+            break; /* always so with two views */
         }
-        break;
+        agree[worst] = agree[--m];
     }
     const int n_agree_disp = m;
     int n_out = 0;
@@ -300,7 +299,7 @@ static int heads_agree_elsewhere(mvt_tracker_t *self, const mvt_track_t *tr, int
             n_out++;
         }
     }
-    int worst = -1;
+    int worst = 0;
     if (m < 3 || n_agree_disp <= n_out || mvt_tri_refine(self->cams, agree, m, 5, x) != MVT_OK ||
         !residuals_agree(self, agree, m, x, &worst)) {
         return 0;

@@ -66,14 +66,14 @@ static int head_jumped(const mvt_tracker_t *self, const mvt_track_t *tr, const m
         }
     }
     const mvt_real dt2 = dt * dt;
-    const mvt_real s00 = MVT_R(2.0) * in->r + dt2 * (hp[0][0] * H[0] + hp[0][1] * H[1] + hp[0][2] * H[2]);
-    const mvt_real s01 = dt2 * (hp[0][0] * H[3] + hp[0][1] * H[4] + hp[0][2] * H[5]);
-    const mvt_real s11 = MVT_R(2.0) * in->r + dt2 * (hp[1][0] * H[3] + hp[1][1] * H[4] + hp[1][2] * H[5]);
-    const mvt_real det = s00 * s11 - s01 * s01;
-    if (!(det > MVT_R(0.0))) {
+    const mvt_real S[3] = {MVT_R(2.0) * in->r + dt2 * (hp[0][0] * H[0] + hp[0][1] * H[1] + hp[0][2] * H[2]),
+                           dt2 * (hp[0][0] * H[3] + hp[0][1] * H[4] + hp[0][2] * H[5]),
+                           MVT_R(2.0) * in->r + dt2 * (hp[1][0] * H[3] + hp[1][1] * H[4] + hp[1][2] * H[5])};
+    mvt_real Si[3];
+    if (mvt_la_inv2_sym(S, Si) != MVT_OK) {
         return 0;
     }
-    const mvt_real d2 = (s11 * e[0] * e[0] - MVT_R(2.0) * s01 * e[0] * e[1] + s00 * e[1] * e[1]) / det;
+    const mvt_real d2 = Si[0] * e[0] * e[0] + MVT_R(2.0) * Si[1] * e[0] * e[1] + Si[2] * e[1] * e[1];
     return d2 > self->cfg.numerics.gate_chi2;
 }
 
